@@ -1,0 +1,103 @@
+// scene model: plain data, exactly the content of a scene file (SPEC §9).
+//
+// A scene is built in code (src/collective/builders) or read from a scene file (src/io/scene_file)
+// and is never changed by the simulator. All arrays are flat and row-major; every field says its
+// shape and unit. Several scenes of the same shape form a batch (sim/batch.hpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace divcoll::sim {
+
+// masses and springs per agent, and springs per connector (SPEC §1, §4.1, §6.2)
+inline constexpr int kAgentMasses = 11;
+inline constexpr int kAgentSprings = 21;
+inline constexpr int kConnectorSprings = 5;
+inline constexpr int kHidden = 32;  // width of both hidden layers of both controllers
+
+// constants of the step and of the controllers (SPEC §2, §4.3, §6.3); written into every scene file
+struct Constants {
+  double dt = 0.004;            // s, one step
+  double omega = 10.0;          // rad/s, agent sine frequency
+  int n_sines = 10;             // agent sine inputs
+  double agent_alpha = 0.15;    // agent actuation smoothing
+  double agent_kappa = 0.05;    // agent sensor scale
+  double conn_alpha = 0.1;      // connector actuation smoothing
+  double conn_kappa_x = 10.0;   // connector position sensor scale
+  double conn_kappa_v = 1.0;    // connector velocity sensor scale
+  double eps_len = 1e-6;        // u, spring length regulariser
+  int substeps = 0;             // physics substeps per step; 0 = choose from the stability rule
+};
+
+// one terrain segment: the line y = y_start + slope * (x - x_start) for x_start <= x < next x_start
+struct Segment {
+  double x_start = 0;  // u (the first segment's is ignored: it extends to -inf)
+  double y_start = 0;  // u
+  double slope = 0;    // dimensionless
+};
+
+// an environment (SPEC §3): physical constants and terrain
+struct Environment {
+  std::string name = "flat";
+  double gravity = -4.8;        // u/s^2 (negative: down)
+  double damping = 15.0;        // 1/s, velocity decay gamma
+  double friction = 1.0;        // Coulomb mu
+  double tangent_keep = 1.0;    // kappa_t, extra tangential retention on contact
+  double belt_speed = 0.0;      // u/s, floor moves backward at this speed
+  double wind_amp = 0.0;        // u/s^2, horizontal wind acceleration amplitude
+  double wind_period = 4.0;     // s
+  double adhesion = 0.0;        // u/s^2, downward pull on masses near the surface
+  double adhesion_band = 0.01;  // u, height above the surface where adhesion acts
+  std::vector<Segment> terrain{Segment{}};  // sorted by x_start, at least one
+};
+
+// a scene: N masses, S springs, A agents, C connectors
+struct Scene {
+  Constants constants;
+  Environment env;
+
+  std::vector<double> x0;    // (N x 2) u, initial positions
+  std::vector<double> mass;  // (N) mass units
+
+  std::vector<int32_t> spring_i, spring_j;  // (S) mass indices
+  std::vector<double> rest_length;          // (S) u
+  std::vector<double> stiffness;            // (S) force/u
+  std::vector<double> amplitude;            // (S) relative actuation amplitude (0 = passive)
+  std::vector<double> damping;              // (S) dashpot
+
+  std::vector<int32_t> agent_mass_index;    // (A x 11) the agent's masses in its own order
+  std::vector<int32_t> agent_spring_index;  // (A x 21) the spring each controller output drives
+  std::vector<double> agent_params;         // (A x P_a) flat MLP parameters (SPEC §4.3)
+
+  std::vector<int32_t> connector_spring_index;  // (C x 5)
+  std::vector<double> connector_params;         // (P_c) shared connector MLP, empty when C = 0
+
+  int n_masses() const { return static_cast<int>(mass.size()); }
+  int n_springs() const { return static_cast<int>(spring_i.size()); }
+  int n_agents() const { return static_cast<int>(agent_mass_index.size() / kAgentMasses); }
+  int n_connectors() const { return static_cast<int>(connector_spring_index.size() / kConnectorSprings); }
+};
+
+// parameter counts of the two controllers (SPEC §4.3, §6.3)
+int agent_input_size(const Constants& c);        // n_sines + 4 * 11
+int agent_param_count(const Constants& c);       // 3509 with the defaults
+inline constexpr int kConnectorInputs = 11;
+int connector_param_count();                     // 1473
+
+// checks every structural and numerical invariant of a scene (shapes, index ranges, finite values,
+// sorted terrain with segments at least 0.01 u wide, positive masses and rest lengths ...).
+// throws divcoll::InputError naming the first problem.
+void validate(const Scene& s);
+
+// Δt·sqrt(Σ k_s / m) at the worst mass (SPEC §2 stability rule; < 2 is stable)
+double stability_number(const Scene& s, double dt);
+// the substeps a scene needs so that the number per substep stays below `limit`
+int substeps_needed(const Scene& s, double limit = 1.9);
+
+// centre of mass x at t = 0 and body lengths (SPEC §1)
+double body_length(const Scene& s, int agent);      // max x − min x of the agent's x0
+double mean_body_length(const Scene& s);
+
+}  // namespace divcoll::sim
