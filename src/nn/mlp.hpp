@@ -1,0 +1,48 @@
+// the multilayer perceptron of both controllers (SPEC §4.3, §6.3) on one flat parameter vector.
+//
+// Layout of the parameter vector: per layer W (out × in, row-major) then b. The same vector is the
+// genome, the gradient (same layout) and the MPI payload. Every layer is followed by tanh.
+//
+// Activations are kept per layer as a column-major (size × cols) block, so one call evaluates the
+// network on `cols` inputs at once (a GEMM: the 5·C springs of the connectors of a collective share
+// one weight set). The caller owns every buffer: forward and backward allocate nothing.
+#pragma once
+
+#include <vector>
+
+namespace divcoll::nn {
+
+struct Layout {
+  std::vector<int> sizes;  // input size, then each layer's output size
+
+  int n_layers() const { return static_cast<int>(sizes.size()) - 1; }
+  int in() const { return sizes.front(); }
+  int out() const { return sizes.back(); }
+  int param_count() const;
+  int weight_offset(int layer) const;  // layer in [0, n_layers)
+  int bias_offset(int layer) const;
+  // doubles of the activation buffer for one column: input + every layer's output
+  int activation_count() const;
+  // offset (per column) of layer l's activations in the activation buffer; l = 0 is the input
+  int activation_offset(int l) const;
+  // doubles of scratch needed by backward for one column
+  int scratch_count() const;
+};
+
+Layout agent_layout(int n_inputs);  // n_inputs → 32 → 32 → 21
+Layout connector_layout();          // 11 → 32 → 32 → 1
+
+// acts: activation buffer of activation_count()*cols doubles, laid out as blocks per layer, each block
+// (size_l × cols) column-major; the caller fills the input block (l = 0), forward fills the rest.
+void forward(const Layout& L, const double* params, int cols, double* acts);
+
+// backward from the gradient of the loss w.r.t. the outputs (post-tanh), out_grad (out × cols).
+// adds the parameter gradient into param_grad (param_count()) and, when in_grad is not null, writes the
+// gradient w.r.t. the input block into in_grad (in × cols). scratch: scratch_count()*cols doubles.
+void backward(const Layout& L, const double* params, int cols, const double* acts, const double* out_grad,
+              double* param_grad, double* in_grad, double* scratch);
+
+// tanh over n values, vectorised: 1 − 2/(exp(2x)+1) with Eigen's packet exp (absolute error ≈ 1e-16)
+void tanh_inplace(double* p, int n);
+
+}  // namespace divcoll::nn

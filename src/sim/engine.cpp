@@ -1,0 +1,260 @@
+#include "sim/engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/check.hpp"
+#include "sim/model.hpp"
+#include "sim/stages.hpp"
+
+namespace divcoll::sim {
+
+const char* status_name(Status s) {
+  switch (s) {
+    case Status::ok: return "ok";
+    case Status::nan: return "nan";
+    case Status::unstable: return "unstable";
+  }
+  return "?";
+}
+
+// buffers sized once per (shape, steps, options) and reused: nothing is allocated inside the step loop
+struct Simulator::Impl {
+  Model model;
+
+  // tape (grad) or rolling state (no grad). Substep states k = 0 .. T·n
+  std::vector<double> xs, vs;          // (states × N × 2)
+  std::vector<uint8_t> taus;           // (states × N)
+  std::vector<double> vps;             // (T·n × N × 2) v' per substep (grad only)
+  std::vector<ContactRecord> recs;     // (T·n × N) (grad only)
+  std::vector<double> os;              // (T × S) o'_t after control (grad) or (S) rolling
+  std::vector<double> agent_acts;      // (T × A × agent acts) (grad) or one step
+  std::vector<double> conn_acts;       // (T × conn acts × 5C) (grad) or one step
+
+  // scratch
+  std::vector<double> F, Fb, vpb, xb, vb, xb2, vb2, ob, Lb, scratch;
+
+  template <class T>
+  static void fit(std::vector<T>& v, size_t n) {
+    if (v.size() < n) v.resize(n);
+  }
+
+  void size_for(const Model& m, const RunOptions& opt) {
+    const size_t N2 = 2 * static_cast<size_t>(m.N);
+    const size_t steps_kept = opt.grad ? opt.steps : 1;
+    const size_t sub_kept = opt.grad ? static_cast<size_t>(opt.steps) * m.substeps : 1;
+    const size_t states = opt.grad ? sub_kept + 1 : 2;
+    fit(xs, states * N2);
+    fit(vs, states * N2);
+    fit(taus, states * m.N);
+    if (opt.grad) {
+      fit(vps, sub_kept * N2);
+      fit(recs, sub_kept * m.N);
+    } else {
+      fit(vps, N2);
+    }
+    fit(os, (steps_kept + 1) * m.S);
+    fit(agent_acts, steps_kept * m.A * m.agent_layout.activation_count());
+    fit(conn_acts, steps_kept * m.conn_layout.activation_count() * kConnectorSprings * m.C);
+    for (auto* b : {&F, &Fb, &vpb, &xb, &vb, &xb2, &vb2}) fit(*b, N2);
+    fit(ob, m.S);
+    fit(Lb, m.S);
+    const size_t cols = kConnectorSprings * static_cast<size_t>(m.C);
+    const size_t agent_scratch = m.agent_layout.in() + m.agent_layout.scratch_count();
+    const size_t conn_scratch = cols * (1 + kConnectorInputs + m.conn_layout.scratch_count());
+    fit(scratch, std::max(agent_scratch, conn_scratch));
+  }
+
+  RunResult run(const Scene& sc, const RunOptions& opt);
+};
+
+Simulator::Simulator() : impl_(std::make_unique<Impl>()) {}
+Simulator::~Simulator() = default;
+
+size_t Simulator::workspace_bytes() const {
+  const Impl& I = *impl_;
+  size_t b = 0;
+  for (const auto* v : {&I.xs, &I.vs, &I.vps, &I.os, &I.agent_acts, &I.conn_acts, &I.F, &I.Fb, &I.vpb, &I.xb,
+                        &I.vb, &I.xb2, &I.vb2, &I.ob, &I.Lb, &I.scratch})
+    b += v->capacity() * sizeof(double);
+  b += I.taus.capacity() + I.recs.capacity() * sizeof(ContactRecord);
+  return b;
+}
+
+RunResult Simulator::run(const Scene& scene, const RunOptions& opt) { return impl_->run(scene, opt); }
+
+std::vector<RunResult> Simulator::run_batch(const std::vector<Scene>& scenes, const RunOptions& opt) {
+  std::vector<RunResult> out;
+  out.reserve(scenes.size());
+  for (size_t b = 0; b < scenes.size(); ++b) {
+    const Scene& s = scenes[b];
+    const Scene& f = scenes.front();
+    DIVCOLL_THROW_UNLESS(s.n_masses() == f.n_masses() && s.n_springs() == f.n_springs() &&
+                             s.n_agents() == f.n_agents() && s.n_connectors() == f.n_connectors(),
+                         "batch scene " << b << " has shape (N, S, A, C) = (" << s.n_masses() << ", "
+                                        << s.n_springs() << ", " << s.n_agents() << ", " << s.n_connectors()
+                                        << "), unlike scene 0's (" << f.n_masses() << ", " << f.n_springs()
+                                        << ", " << f.n_agents() << ", " << f.n_connectors() << ")");
+  }
+  for (const Scene& s : scenes) out.push_back(impl_->run(s, opt));
+  return out;
+}
+
+RunResult simulate(const Scene& scene, const RunOptions& opt) {
+  Simulator sim;
+  return sim.run(scene, opt);
+}
+
+RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
+  validate(sc);
+  DIVCOLL_THROW_UNLESS(opt.steps >= 1, "steps must be at least 1 (got " << opt.steps << ")");
+  DIVCOLL_THROW_UNLESS(opt.hidden_every >= 1, "hidden_every must be at least 1 (got " << opt.hidden_every << ")");
+
+  // substeps: from the stability rule, or as the scene file demands if that is enough
+  const int needed = substeps_needed(sc);
+  int n_sub = sc.constants.substeps;
+  if (n_sub == 0) n_sub = needed;
+  DIVCOLL_THROW_UNLESS(n_sub >= needed,
+                       "the scene is unstable at dt = " << sc.constants.dt << " s: dt*sqrt(sum k/m) = "
+                           << stability_number(sc, sc.constants.dt) << " at the worst mass needs at least "
+                           << needed << " substeps, but the scene sets substeps = " << n_sub
+                           << " (set it to 0 to choose automatically)");
+  Model& m = model;
+  m.compile(sc, n_sub);
+  size_for(m, opt);
+
+  const int T = opt.steps, n = m.substeps, N = m.N, S = m.S;
+  const size_t N2 = 2 * static_cast<size_t>(N);
+  const int na = m.agent_layout.activation_count();
+  const int nc = m.conn_layout.activation_count() * kConnectorSprings * m.C;
+  const int cols = kConnectorSprings * m.C;
+
+  RunResult res;
+  res.substeps = n;
+  if (opt.record) {
+    res.x.assign((T + 1) * N2, std::numeric_limits<double>::quiet_NaN());
+    res.v.assign((T + 1) * N2, std::numeric_limits<double>::quiet_NaN());
+    res.touch.assign(static_cast<size_t>(T + 1) * N, 0);
+  }
+  if (opt.record_hidden && m.C > 0) res.hidden.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * cols * 32);
+
+  // state 0: x = x0, v = 0, o = 0, τ = 0
+  std::copy(sc.x0.begin(), sc.x0.end(), xs.begin());
+  std::fill(vs.begin(), vs.begin() + N2, 0.0);
+  std::fill(taus.begin(), taus.begin() + N, 0);
+  std::fill(os.begin(), os.begin() + S, 0.0);
+  if (opt.record) std::copy(sc.x0.begin(), sc.x0.end(), res.x.begin()), std::fill(res.v.begin(), res.v.begin() + N2, 0.0);
+
+  // ---- forward -------------------------------------------------------------------------------------
+  int k = 0;  // substep state index (grad) — rolling index modulo 2 otherwise
+  auto sx = [&](int kk) { return &xs[(opt.grad ? kk : kk & 1) * N2]; };
+  auto sv = [&](int kk) { return &vs[(opt.grad ? kk : kk & 1) * N2]; };
+  auto st = [&](int kk) { return &taus[static_cast<size_t>(opt.grad ? kk : kk & 1) * N]; };
+  for (int t = 0; t < T; ++t) {
+    // control: o'_t from state t (o kept per step on the tape)
+    double* o = &os[(opt.grad ? t + 1 : 0) * static_cast<size_t>(S)];
+    if (opt.grad) std::copy(os.begin() + t * S, os.begin() + (t + 1) * S, o);
+    ControlBuffers cb{&agent_acts[(opt.grad ? t : 0) * static_cast<size_t>(m.A) * na],
+                      &conn_acts[(opt.grad ? t : 0) * static_cast<size_t>(nc)]};
+    control_forward(m, t, sx(k), sv(k), st(k), o, cb);
+    if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
+      const double* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * cols;
+      res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * cols);
+    }
+    // physics substeps
+    for (int s = 0; s < n; ++s, ++k) {
+      double* vp = opt.grad ? &vps[static_cast<size_t>(k) * N2] : vps.data();
+      springs_forward(m, sx(k), sv(k), o, F.data());
+      velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
+      contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
+                      opt.grad ? &recs[static_cast<size_t>(k) * N] : nullptr);
+    }
+    // numerical trouble ends the episode, with where it happened
+    const double* x1 = sx(k);
+    const double* v1 = sv(k);
+    for (int i = 0; i < N; ++i) {
+      const bool finite = std::isfinite(x1[2 * i]) && std::isfinite(x1[2 * i + 1]) && std::isfinite(v1[2 * i]) &&
+                          std::isfinite(v1[2 * i + 1]);
+      const bool tame = std::abs(v1[2 * i]) <= opt.speed_limit && std::abs(v1[2 * i + 1]) <= opt.speed_limit;
+      if (!finite || !tame) {
+        res.status = finite ? Status::unstable : Status::nan;
+        res.bad_step = t + 1;
+        res.bad_mass = i;
+        res.message = msg() << (finite ? "runaway velocity" : "non-finite state") << " at step " << t + 1
+                            << ", mass " << i << " (x = " << x1[2 * i] << ", " << x1[2 * i + 1]
+                            << "; v = " << v1[2 * i] << ", " << v1[2 * i + 1] << ")";
+        break;
+      }
+    }
+    if (opt.record) {
+      std::copy(x1, x1 + N2, res.x.begin() + (t + 1) * N2);
+      std::copy(v1, v1 + N2, res.v.begin() + (t + 1) * N2);
+      std::copy(st(k), st(k) + N, res.touch.begin() + static_cast<size_t>(t + 1) * N);
+    }
+    if (res.status != Status::ok) break;
+  }
+
+  if (res.status != Status::ok) {
+    res.travel = std::numeric_limits<double>::quiet_NaN();
+    if (opt.grad) {
+      res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+      res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
+      res.grad_x0.assign(N2, 0.0);
+      res.grad_rest_length.assign(S, 0.0);
+    }
+    return res;
+  }
+
+  // travel = mean x at T − mean x at 0
+  const double* xT = sx(k);
+  double sT = 0, s0 = 0;
+  for (int i = 0; i < N; ++i) {
+    sT += xT[2 * i];
+    s0 += sc.x0[2 * i];
+  }
+  res.travel = sT / N - s0 / N;
+  if (!opt.grad) return res;
+
+  // ---- backward ------------------------------------------------------------------------------------
+  res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+  res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
+  res.grad_rest_length.assign(S, 0.0);
+  double* Lbar = res.grad_rest_length.data();
+  double* gc = m.C > 0 ? res.grad_connector_params.data() : nullptr;
+  // seed: ∂travel/∂x_T = (1/N, 0)
+  double* xbar = xb.data();
+  double* vbar = vb.data();
+  double* xbar_prev = xb2.data();
+  double* vbar_prev = vb2.data();
+  for (int i = 0; i < N; ++i) {
+    xbar[2 * i] = 1.0 / N;
+    xbar[2 * i + 1] = 0;
+  }
+  std::fill(vbar, vbar + N2, 0.0);
+  std::fill(ob.begin(), ob.begin() + S, 0.0);
+  for (int t = T - 1; t >= 0; --t) {
+    const double* o = &os[(t + 1) * static_cast<size_t>(S)];
+    for (int s = n - 1; s >= 0; --s) {
+      --k;
+      const double* vp = &vps[static_cast<size_t>(k) * N2];
+      // contact: x̄_{k+1}, v̄_{k+1} → v̄', x̄_k (partial)
+      std::fill(xbar_prev, xbar_prev + N2, 0.0);
+      std::fill(vbar_prev, vbar_prev + N2, 0.0);
+      contact_adjoint(m, vp, sv(k + 1), &recs[static_cast<size_t>(k) * N], xbar, vbar, vpb.data(), xbar_prev);
+      velocity_adjoint(m, vpb.data(), vbar_prev, Fb.data());
+      springs_adjoint(m, sx(k), sv(k), o, Fb.data(), xbar_prev, vbar_prev, ob.data(), Lbar);
+      std::swap(xbar, xbar_prev);
+      std::swap(vbar, vbar_prev);
+    }
+    ControlBuffers cb{&agent_acts[static_cast<size_t>(t) * m.A * na], &conn_acts[static_cast<size_t>(t) * nc]};
+    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar, res.grad_agent_params.data(), gc,
+                    scratch.data());
+  }
+  // x0 is both the initial state and travel's baseline
+  res.grad_x0.assign(xbar, xbar + N2);
+  for (int i = 0; i < N; ++i) res.grad_x0[2 * i] -= 1.0 / N;
+  return res;
+}
+
+}  // namespace divcoll::sim

@@ -1,0 +1,60 @@
+#include "sim/model.hpp"
+
+#include <cmath>
+
+namespace divcoll::sim {
+
+void Model::compile(const Scene& s, int n_substeps) {
+  scene = &s;
+  N = s.n_masses();
+  S = s.n_springs();
+  A = s.n_agents();
+  C = s.n_connectors();
+  K = static_cast<int>(s.env.terrain.size());
+  substeps = n_substeps;
+  dt = s.constants.dt;
+  h = dt / substeps;
+  decay = std::exp(-s.env.damping * h);
+
+  seg_x.resize(K);
+  seg_y.resize(K);
+  seg_s.resize(K);
+  for (int k = 0; k < K; ++k) {
+    seg_x[k] = s.env.terrain[k].x_start;
+    seg_y[k] = s.env.terrain[k].y_start;
+    seg_s[k] = s.env.terrain[k].slope;
+  }
+  has_walls = K > 1;
+  has_wind = s.env.wind_amp != 0;
+  has_adhesion = s.env.adhesion != 0;
+  has_belt = s.env.belt_speed != 0;
+  has_dashpots = false;
+  for (double c : s.damping) has_dashpots = has_dashpots || c != 0;
+  has_connectors = C > 0;
+
+  inv_mass.resize(N);
+  for (int i = 0; i < N; ++i) inv_mass[i] = 1.0 / s.mass[i];
+
+  agent_layout = nn::agent_layout(agent_input_size(s.constants));
+  conn_layout = nn::connector_layout();
+  agent_params = agent_layout.param_count();
+  conn_params = conn_layout.param_count();
+
+  // distinct anchors of each connector, in order of first appearance (i then j, spring by spring)
+  conn_anchor_start.assign(1, 0);
+  conn_anchor.clear();
+  for (int c = 0; c < C; ++c) {
+    const int first = conn_anchor_start.back();
+    for (int r = 0; r < kConnectorSprings; ++r) {
+      const int sp = s.connector_spring_index[c * kConnectorSprings + r];
+      for (int end : {s.spring_i[sp], s.spring_j[sp]}) {
+        bool seen = false;
+        for (int q = first; q < static_cast<int>(conn_anchor.size()); ++q) seen = seen || conn_anchor[q] == end;
+        if (!seen) conn_anchor.push_back(end);
+      }
+    }
+    conn_anchor_start.push_back(static_cast<int32_t>(conn_anchor.size()));
+  }
+}
+
+}  // namespace divcoll::sim

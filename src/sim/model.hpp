@@ -1,0 +1,45 @@
+// a scene compiled for the step: flattened topology, derived constants and the flags that let a scene
+// skip what it does not need (walls, wind, adhesion, belt, spring dashpots, connectors).
+// internal to src/sim.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "nn/mlp.hpp"
+#include "sim/scene.hpp"
+
+namespace divcoll::sim {
+
+struct Model {
+  const Scene* scene = nullptr;
+  int N = 0, S = 0, A = 0, C = 0, K = 0;
+  int substeps = 1;
+  double dt = 0;          // s, control step
+  double h = 0;           // s, physics substep dt / substeps
+  double decay = 1;       // exp(−γ h)
+
+  // what the scene needs
+  bool has_walls = false;       // terrain with more than one segment (also: slopes change)
+  bool has_wind = false;
+  bool has_adhesion = false;
+  bool has_belt = false;
+  bool has_dashpots = false;    // any spring damping > 0
+  bool has_connectors = false;
+
+  // terrain as separate arrays (K)
+  std::vector<double> seg_x, seg_y, seg_s;
+
+  std::vector<double> inv_mass;  // (N)
+
+  // controllers
+  nn::Layout agent_layout, conn_layout;
+  int agent_params = 0, conn_params = 0;
+  // distinct anchor masses per connector: conn_anchor[conn_anchor_start[c] .. conn_anchor_start[c+1])
+  std::vector<int32_t> conn_anchor_start, conn_anchor;
+
+  // compiles `s` (validated by the caller); reuses this model's buffers
+  void compile(const Scene& s, int substeps);
+};
+
+}  // namespace divcoll::sim

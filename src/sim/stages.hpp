@@ -1,0 +1,77 @@
+// the stages of one step (SPEC §2), each with its adjoint beside it and with the same arguments.
+//
+//   control      reads x_t, v_t, τ_t, o_t        writes o'_t (and the controllers' activations)
+//   springs      reads x_k, v_k, o'_t            writes F_k                      (per substep k)
+//   velocity     reads v_k, F_k, x_k             writes v'_k                     (per substep k)
+//   contact      reads x_k, v'_k                 writes x_k+1, v_k+1, τ_k+1      (per substep k)
+//
+// Adjoints take the gradient of the stage's outputs and add the gradient w.r.t. its inputs
+// (x̄, v̄, ō, L̄, parameter gradients). Branches (contact or not, floor or wall, clamps) are read back
+// from the forward records and held fixed. Internal to src/sim.
+#pragma once
+
+#include <cstdint>
+
+#include "sim/model.hpp"
+
+namespace divcoll::sim {
+
+// ---- control -----------------------------------------------------------------------------------
+// activation buffers: agents (A × agent act count, one column each), connectors (conn act count × 5C,
+// one column per connector spring). o is updated in place: o ← α tanh(net) + (1 − α) o.
+struct ControlBuffers {
+  double* agent_acts;   // A × agent_layout.activation_count()
+  double* conn_acts;    // conn_layout.activation_count() × 5C
+};
+
+void control_forward(const Model& m, int t, const double* x, const double* v, const uint8_t* tau, double* o,
+                     const ControlBuffers& buf);
+// ob: in ō'_t, out ō_t; adds into xb, vb, Lb, g_agent (A × P_a), g_conn (P_c); scratch as nn::backward
+// needs (max of agent and 5C connector scratch) plus 11 × 5C for the connector input gradient
+void control_adjoint(const Model& m, int t, const double* x, const double* v, const ControlBuffers& buf,
+                     double* ob, double* xb, double* vb, double* Lb, double* g_agent, double* g_conn,
+                     double* scratch);
+
+// ---- springs -----------------------------------------------------------------------------------
+void springs_forward(const Model& m, const double* x, const double* v, const double* o, double* F);
+// Fb: gradient w.r.t. F; adds into xb, vb, ob, Lb
+void springs_adjoint(const Model& m, const double* x, const double* v, const double* o, const double* Fb,
+                     double* xb, double* vb, double* ob, double* Lb);
+
+// ---- free velocity ------------------------------------------------------------------------------
+// v' = e^(−γh) v + h (F/m + (w(t), g) + adhesion(x))
+void velocity_forward(const Model& m, int t, const double* x, const double* v, const double* F, double* vp);
+// vpb: gradient w.r.t. v'; adds into vb and writes Fb
+void velocity_adjoint(const Model& m, const double* vpb, double* vb, double* Fb);
+
+// ---- contact ------------------------------------------------------------------------------------
+// what the adjoint needs of one mass's contact (kind 0: none, 1: floor, 2: wall)
+struct ContactRecord {
+  uint8_t kind = 0;
+  uint8_t toi_active = 0;       // t* = φ / (−v'·n) strictly inside (0, h): differentiable
+  uint8_t friction_active = 0;  // v'' = κ max(0, 1 + μ v_n/|v_t|) v_t + b with the max and |v_t| > 0
+  double n[2] = {0, 0};
+  double b[2] = {0, 0};
+  double dphi[2] = {0, 0};      // ∂φ/∂p
+  double phi = 0;
+  double tstar = 0;
+};
+
+// rec may be null (no tape)
+void contact_forward(const Model& m, const double* x, const double* vp, double* x_next, double* v_next,
+                     uint8_t* tau_next, ContactRecord* rec);
+// given x̄_{k+1}, v̄_{k+1}: writes vpb (gradient w.r.t. v') and adds into xb (gradient w.r.t. x_k)
+void contact_adjoint(const Model& m, const double* vp, const double* v_next, const ContactRecord* rec,
+                     const double* xb_next, const double* vb_next, double* vpb, double* xb);
+
+// segment index of x: the k with x_k ≤ x < x_(k+1)
+inline int segment_of(const Model& m, double x) {
+  int k = m.K - 1;
+  while (k > 0 && x < m.seg_x[k]) --k;
+  return k;
+}
+inline double terrain_height(const Model& m, int k, double x) {
+  return m.seg_y[k] + m.seg_s[k] * (x - m.seg_x[k]);
+}
+
+}  // namespace divcoll::sim
