@@ -74,9 +74,11 @@ void contact_forward(const Model& m, const double* x, const double* vp, double* 
     }
     // time of impact: move with v' until the surface, then with v''
     const double D = -(vx * r.n[0] + vy * r.n[1]);
-    if (r.phi > 0) {
+    // at φ = 0 exactly (a mass resting on the ground) the gradient passes through the clamp, as a
+    // clamp's does in autodiff frameworks: that is what the independent implementation does too
+    if (r.phi >= 0) {
       const double ratio = r.phi / D;
-      if (ratio < h) {
+      if (ratio <= h) {
         r.tstar = ratio;
         r.toi_active = 1;
       } else {

@@ -48,7 +48,7 @@ void velocity_adjoint(const Model& m, const double* vpb, double* vb, double* Fb)
 // what the adjoint needs of one mass's contact (kind 0: none, 1: floor, 2: wall)
 struct ContactRecord {
   uint8_t kind = 0;
-  uint8_t toi_active = 0;       // t* = φ / (−v'·n) strictly inside (0, h): differentiable
+  uint8_t toi_active = 0;       // t* = φ / (−v'·n) inside [0, h]: differentiable
   uint8_t friction_active = 0;  // v'' = κ max(0, 1 + μ v_n/|v_t|) v_t + b with the max and |v_t| > 0
   double n[2] = {0, 0};
   double b[2] = {0, 0};
