@@ -216,6 +216,15 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   res.travel = sT / N - s0 / N;
   if (!opt.grad) return res;
 
+  for (size_t q = 0; q < static_cast<size_t>(k) * N; ++q) {
+    const ContactRecord& r = recs[q];
+    res.contacts.floor += r.kind == 1;
+    res.contacts.wall += r.kind == 2;
+    res.contacts.sliding += r.friction_active;
+    res.contacts.toi += r.toi_active;
+    res.contacts.belt += r.kind == 1 && (r.b[0] != 0 || r.b[1] != 0);
+  }
+
   // ---- backward ------------------------------------------------------------------------------------
   res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
   res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);

@@ -49,6 +49,15 @@ struct RunResult {
   std::string message;            // human-readable account of a non-ok status
   int substeps = 1;               // physics substeps per step that were used
 
+  // contact events over the episode, counted per mass and substep (with grad only: read off the tape)
+  struct ContactCounts {
+    long floor = 0;     // floor contacts
+    long wall = 0;      // wall contacts
+    long sliding = 0;   // contacts where the friction projection is active (v'' ≠ b)
+    long toi = 0;       // contacts whose time of impact is differentiable (0 ≤ t* ≤ h)
+    long belt = 0;      // floor contacts on a moving belt
+  } contacts;
+
   // with grad (zero when status is not ok)
   std::vector<double> grad_agent_params;      // (A x P_a)
   std::vector<double> grad_connector_params;  // (P_c), empty when C = 0
