@@ -1,0 +1,57 @@
+// scenes of agents, pairs and chains (SPEC §4.1, §6.1, §6.2, §7.4), shared by the CLI, the tests,
+// the benchmark and the later pipeline stages
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/rng.hpp"
+#include "sim/scene.hpp"
+
+namespace divcoll::collective {
+
+// the connector anchors of one agent (SPEC §6.1), as local mass indices 0..10
+struct Anchors {
+  int back_foot = -1, front_foot = -1, back_upper = -1, front_upper = -1;
+};
+
+// one agent as data: genotype, geometry (rest positions with min x = min y = 0) and controller
+struct Agent {
+  uint32_t cells = 0;                  // body genotype (28 lattice cells)
+  uint32_t springs = 0;                // spring genotype (21 bits, 1 = active)
+  std::vector<double> rest_pos;        // (11 x 2) u
+  std::vector<int32_t> spring_i, spring_j;  // (21) local mass indices
+  std::vector<double> rest_length;     // (21) u
+  std::vector<double> amplitude;       // (21) 0.15 active, 0 passive
+  std::vector<double> params;          // (P_a) controller, SPEC §4.3
+  Anchors anchors;                     // filled by compute_anchors
+};
+
+// stiffness of the two connector kinds (SPEC §6.2), force/u
+inline constexpr double kWeakConnector = 5e3;
+inline constexpr double kStrongConnector = 3e4;
+inline constexpr double kConnectorAmplitude = 0.6;
+
+// a random valid agent with a freshly initialised controller
+Agent random_agent(Rng& rng, const sim::Constants& c = {});
+// rebuilds rest_length from rest_pos (after the rest positions changed)
+void update_rest_lengths(Agent& a);
+
+// an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
+sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c = {});
+
+// SPEC §6.1: anchors from the agent's own 1000-step run on flat ground
+Anchors compute_anchors(const Agent& a, const sim::Constants& c = {}, int steps = 1000);
+
+// SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + 0.05)
+// joined by one connector of the given stiffness; both agents need anchors
+sim::Scene pair_scene(const Agent& posterior, const Agent& anterior, const std::vector<double>& connector_params,
+                      double stiffness, const std::string& env, const sim::Constants& c = {});
+
+// SPEC §7.4: a chain of agents in binary-tree heap order: agent 0 is front-most, agents 2k+1 and 2k+2 hang
+// behind agent k (same x, overlapping); connector k−1 joins child k (posterior) to its parent (anterior)
+sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& connector_params,
+                       double stiffness, const std::string& env, const sim::Constants& c = {});
+
+}  // namespace divcoll::collective

@@ -1,0 +1,311 @@
+// physics invariants and hard cases of the engine (SPEC §2): free fall, momentum, energy, no
+// penetration, stability, NaN containment, tape-free forward runs
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "collective/builders.hpp"
+#include "common/check.hpp"
+#include "io/environments.hpp"
+#include "morph/body.hpp"
+#include "sim/engine.hpp"
+
+namespace divcoll {
+namespace {
+
+collective::Agent make_agent(uint64_t seed) {
+  Rng rng = make_rng(seed, 3, 0);
+  collective::Agent a = collective::random_agent(rng);
+  a.anchors = collective::compute_anchors(a, {}, 300);
+  return a;
+}
+
+std::vector<double> make_conn(uint64_t seed) {
+  Rng rng = make_rng(seed, 4, 0);
+  return morph::init_connector_params(rng);
+}
+
+// a scene of free masses (no springs, no agents), high above the ground
+sim::Scene free_masses(int n) {
+  sim::Scene s;
+  for (int i = 0; i < n; ++i) {
+    s.x0.push_back(0.1 * i);
+    s.x0.push_back(10.0 + 0.01 * i);
+    s.mass.push_back(1.0);
+  }
+  s.env = io::place_environment(io::environment_table("flat"), 1.0);
+  return s;
+}
+
+TEST(Engine, FreeFallMatchesClosedForm) {
+  sim::Scene s = free_masses(3);
+  const int T = 200;
+  sim::RunOptions opt;
+  opt.steps = T;
+  opt.record = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok);
+  // v_t = h g (1 − e^t)/(1 − e), y_t = y_0 + h Σ_{k=1..t} v_k with e = exp(−γ h)
+  const double h = s.constants.dt, g = s.env.gravity, e = std::exp(-s.env.damping * h);
+  double y = s.x0[1], v = 0;
+  for (int t = 1; t <= T; ++t) {
+    v = h * g * (1 - std::pow(e, t)) / (1 - e);
+    y += h * v;
+    ASSERT_NEAR(r.v[t * 6 + 1], v, 1e-12) << "step " << t;
+    ASSERT_NEAR(r.x[t * 6 + 1], y, 1e-12) << "step " << t;
+    ASSERT_EQ(r.x[t * 6], s.x0[0]) << "no horizontal motion";
+  }
+}
+
+TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
+  const collective::Agent a = make_agent(1), b = make_agent(2);
+  sim::Scene s = collective::pair_scene(a, b, make_conn(1), collective::kWeakConnector, "flat");
+  s.env.gravity = 0;
+  s.env.damping = 0;
+  s.env.terrain = {sim::Segment{-1e9, -50, 0}};  // the ground is far below
+  s.constants.substeps = 4;  // undamped and actuated: stay well inside the stability limit
+  sim::RunOptions opt;
+  opt.steps = 500;
+  opt.record = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  const int N = s.n_masses();
+  double max_speed = 0;
+  for (int t = 0; t <= opt.steps; ++t) {
+    double px = 0, py = 0;
+    for (int i = 0; i < N; ++i) {
+      px += r.v[(t * N + i) * 2];
+      py += r.v[(t * N + i) * 2 + 1];
+      max_speed = std::max(max_speed, std::abs(r.v[(t * N + i) * 2]));
+    }
+    ASSERT_NEAR(px, 0.0, 1e-11) << "step " << t;
+    ASSERT_NEAR(py, 0.0, 1e-11) << "step " << t;
+  }
+  EXPECT_GT(max_speed, 1e-3) << "the controllers should move the masses";
+}
+
+TEST(Engine, DampingRemovesEnergyFromPassiveBody) {
+  collective::Agent a = make_agent(3);
+  for (double& amp : a.amplitude) amp = 0;  // passive
+  sim::Scene s = collective::agent_scene(a, "flat");
+  s.env.gravity = 0;
+  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
+  // stretch the body: scale the initial positions by 1.2
+  for (double& x : s.x0) x *= 1.2;
+  sim::RunOptions opt;
+  opt.steps = 400;
+  opt.record = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok);
+  const int N = s.n_masses();
+  auto energy = [&](int t) {
+    double E = 0;
+    for (int i = 0; i < N; ++i)
+      E += 0.5 * (std::pow(r.v[(t * N + i) * 2], 2) + std::pow(r.v[(t * N + i) * 2 + 1], 2));
+    for (int q = 0; q < s.n_springs(); ++q) {
+      const int i = s.spring_i[q], j = s.spring_j[q];
+      const double l = std::hypot(r.x[(t * N + i) * 2] - r.x[(t * N + j) * 2],
+                                  r.x[(t * N + i) * 2 + 1] - r.x[(t * N + j) * 2 + 1]);
+      E += 0.5 * s.stiffness[q] * std::pow(l - s.rest_length[q], 2);
+    }
+    return E;
+  };
+  const double E0 = energy(0);
+  ASSERT_GT(E0, 0);
+  // energy over windows of 20 steps never grows, and almost all of it is gone at the end
+  double prev = E0;
+  for (int t = 20; t <= opt.steps; t += 20) {
+    const double E = energy(t);
+    EXPECT_LE(E, prev * (1 + 1e-9)) << "step " << t;
+    prev = E;
+  }
+  EXPECT_LT(energy(opt.steps), 1e-3 * E0);
+}
+
+// the lowest terrain height under x, over both sides of a boundary (a mass exactly on a wall face)
+double ground_at(const sim::Environment& env, double x) {
+  int k = static_cast<int>(env.terrain.size()) - 1;
+  while (k > 0 && x < env.terrain[k].x_start) --k;
+  return env.terrain[k].y_start + env.terrain[k].slope * (x - env.terrain[k].x_start);
+}
+
+// SPEC §2's contact removes the normal velocity but never pushes a mass back out. A mass that slides
+// along one segment's tangent across a change of slope, or down a wall face past the lower floor, ends
+// that step slightly inside the terrain and stays at that depth until it moves out: at most about one
+// step's travel. Where the terrain has no such features the masses never enter it at all.
+class NoPenetration : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
+  const bool features = io::environment_table(GetParam()).relative.size() > 0;
+  const double allowed = features ? 5e-3 : 1e-9;  // u
+  for (uint64_t seed = 0; seed < 3; ++seed) {
+    const collective::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
+    std::vector<double> conn = make_conn(seed);
+    for (double& w : conn) w *= 3.0;  // vigorous actuation
+    sim::Scene s = collective::pair_scene(a, b, conn, collective::kWeakConnector, GetParam());
+    double mx = -1e9;
+    for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
+    s.env = io::place_environment(io::environment_table(GetParam()), mx - 0.047);
+    sim::RunOptions opt;
+    opt.steps = 2000;
+    opt.record = true;
+    const sim::RunResult r = sim::simulate(s, opt);
+    ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+    const int N = s.n_masses();
+    double worst = 0, worst_end = 0;
+    for (int t = 0; t <= opt.steps; ++t)
+      for (int i = 0; i < N; ++i) {
+        const double x = r.x[(t * N + i) * 2], y = r.x[(t * N + i) * 2 + 1];
+        worst = std::max(worst, ground_at(s.env, x) - y);
+        if (t == opt.steps) worst_end = std::max(worst_end, ground_at(s.env, x) - y);
+      }
+    EXPECT_LT(worst, allowed) << GetParam() << " seed " << seed << ": a mass went " << worst << " u into the terrain";
+    EXPECT_LT(worst_end, allowed) << GetParam() << " seed " << seed;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(io::environment_names()),
+                         [](const auto& info) { return info.param; });
+
+TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
+  const collective::Agent a = make_agent(4), b = make_agent(5);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(4), collective::kWeakConnector, "gap");
+  sim::RunOptions opt;
+  opt.steps = 300;
+  opt.record = true;
+  const sim::RunResult plain = sim::simulate(s, opt);
+  opt.grad = true;
+  const sim::RunResult taped = sim::simulate(s, opt);
+  ASSERT_EQ(plain.x, taped.x);
+  ASSERT_EQ(plain.travel, taped.travel);
+}
+
+TEST(Engine, StrongConnectorPairIsSubsteppedAndFinite) {
+  const collective::Agent a = make_agent(6), b = make_agent(7);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(6), collective::kStrongConnector, "flat");
+  sim::RunOptions opt;
+  opt.steps = 1000;
+  opt.grad = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  EXPECT_TRUE(std::isfinite(r.travel));
+  EXPECT_EQ(r.substeps, sim::substeps_needed(s));
+  for (double g : r.grad_connector_params) ASSERT_TRUE(std::isfinite(g));
+}
+
+TEST(Engine, StiffSceneIsSubsteppedAutomaticallyOrRefusedWhenItForbidsSubsteps) {
+  sim::Scene s = free_masses(2);
+  s.x0 = {0.0, 0.5, 0.06, 0.5};
+  s.spring_i = {0};
+  s.spring_j = {1};
+  s.rest_length = {0.05};  // stretched by 0.01 u
+  s.stiffness = {1e6};     // Δt·sqrt(Σk/m) = 4: explicit Euler at one substep would blow up
+  s.amplitude = {0};
+  s.damping = {0};
+  ASSERT_GT(sim::substeps_needed(s), 2);
+  sim::RunOptions opt;
+  opt.steps = 500;
+  opt.record = true;
+  // substeps = 0 (the default): chosen from the stability rule, finite and bounded
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  EXPECT_EQ(r.substeps, sim::substeps_needed(s));
+  for (double x : r.x) ASSERT_LT(std::abs(x), 10.0);
+  // a scene that insists on one substep is refused with a message, never run into NaN
+  s.constants.substeps = 1;
+  try {
+    sim::simulate(s, opt);
+    FAIL() << "an unstable scene was simulated";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("substeps"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
+  std::vector<collective::Agent> agents;
+  for (int q = 0; q < 20; ++q) agents.push_back(make_agent(100 + q));
+  std::vector<const collective::Agent*> ptr;
+  for (const auto& a : agents) ptr.push_back(&a);
+  for (const std::string& env : io::environment_names()) {
+    const sim::Scene s = collective::chain_scene(ptr, make_conn(9), collective::kWeakConnector, env);
+    sim::RunOptions opt;
+    opt.steps = 500;
+    const sim::RunResult r = sim::simulate(s, opt);
+    EXPECT_EQ(r.status, sim::Status::ok) << env << ": " << r.message;
+    EXPECT_TRUE(std::isfinite(r.travel)) << env;
+  }
+}
+
+TEST(Engine, BodyDroppedFromOneUnitOntoAStepEdgeStaysFinite) {
+  sim::Scene s = collective::agent_scene(make_agent(8), "flat");
+  // a step whose edge is under the body's middle, the body 1 u above it
+  double cx = 0;
+  for (int i = 0; i < s.n_masses(); ++i) cx += s.x0[2 * i] / s.n_masses();
+  s.env.terrain = {sim::Segment{-1e9, 0, 0}, sim::Segment{cx, 0.04, 0}};
+  for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 1.04;
+  sim::RunOptions opt;
+  opt.steps = 1000;
+  opt.grad = true;
+  opt.record = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  for (double x : r.x) ASSERT_TRUE(std::isfinite(x));
+  for (double g : r.grad_x0) ASSERT_TRUE(std::isfinite(g));
+  EXPECT_GT(r.contacts.toi, 0);
+}
+
+TEST(Engine, SpringOfNearZeroLengthStaysFinite) {
+  sim::Scene s = free_masses(2);
+  s.x0 = {0.0, 0.5, 1e-12, 0.5};  // two masses almost on top of each other
+  s.spring_i = {0};
+  s.spring_j = {1};
+  s.rest_length = {1e-9};
+  s.stiffness = {3e4};
+  s.amplitude = {0};
+  s.damping = {0};
+  sim::RunOptions opt;
+  opt.steps = 300;
+  opt.grad = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  for (double g : r.grad_x0) EXPECT_TRUE(std::isfinite(g));
+  for (double g : r.grad_rest_length) EXPECT_TRUE(std::isfinite(g));
+}
+
+TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
+  const collective::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
+  const std::vector<double> conn = make_conn(30);
+  std::vector<sim::Scene> batch = {
+      collective::pair_scene(a, b, conn, collective::kWeakConnector, "flat"),
+      collective::pair_scene(b, c, conn, collective::kWeakConnector, "flat"),
+      collective::pair_scene(c, a, conn, collective::kWeakConnector, "flat"),
+  };
+  batch[1].agent_params[100] = std::nan("");
+  sim::RunOptions opt;
+  opt.steps = 200;
+  opt.grad = true;
+  sim::Simulator sim;
+  const std::vector<sim::RunResult> rs = sim.run_batch(batch, opt);
+  EXPECT_EQ(rs[1].status, sim::Status::nan);
+  EXPECT_EQ(rs[1].bad_step, 1);
+  EXPECT_NE(rs[1].message.find("step 1"), std::string::npos) << rs[1].message;
+  EXPECT_TRUE(std::isnan(rs[1].travel));
+  // the others are exactly what they are alone
+  for (int q : {0, 2}) {
+    ASSERT_EQ(rs[q].status, sim::Status::ok);
+    const sim::RunResult alone = sim::simulate(batch[q], opt);
+    EXPECT_EQ(rs[q].travel, alone.travel);
+    EXPECT_EQ(rs[q].grad_connector_params, alone.grad_connector_params);
+  }
+}
+
+TEST(Engine, BatchOfDifferentShapesIsRefused) {
+  const collective::Agent a = make_agent(40), b = make_agent(41);
+  std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat"),
+                                   collective::pair_scene(a, b, make_conn(40), collective::kWeakConnector, "flat")};
+  sim::Simulator sim;
+  EXPECT_THROW(sim.run_batch(batch, sim::RunOptions{}), InputError);
+}
+
+}  // namespace
+}  // namespace divcoll

@@ -1,0 +1,172 @@
+// reverse-mode gradients against central finite differences, in every environment, for all four
+// gradient blocks (agent params, connector params, x0, rest lengths), on scenes where floor and wall
+// contact, the friction projection and the belt are active (counted, and asserted)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "collective/builders.hpp"
+#include "io/environments.hpp"
+#include "morph/body.hpp"
+#include "sim/engine.hpp"
+
+namespace divcoll {
+namespace {
+
+constexpr int kSteps = 150;
+
+struct Fixture {
+  collective::Agent p, a;
+  std::vector<double> conn;
+};
+
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    Fixture f;
+    Rng rng = make_rng(11, 1, 0);
+    f.p = collective::random_agent(rng);
+    f.a = collective::random_agent(rng);
+    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
+    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
+    f.conn = morph::init_connector_params(rng);
+    // nonzero biases so that every term matters
+    for (double& w : f.conn) w += 0.05 * normal(rng);
+    return f;
+  }();
+  return f;
+}
+
+// a pair in `env`; terrain features start 0.003 u ahead of the front, so that walls are hit early
+sim::Scene pair_in(const std::string& env) {
+  const Fixture& f = fixture();
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
+  double mx = -1e9;
+  for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
+  s.env = io::place_environment(io::environment_table(env), mx - 0.047);
+  return s;
+}
+
+double travel(const sim::Scene& s) {
+  sim::RunOptions opt;
+  opt.steps = kSteps;
+  const sim::RunResult r = sim::simulate(s, opt);
+  EXPECT_EQ(r.status, sim::Status::ok) << r.message;
+  return r.travel;
+}
+
+using Apply = std::function<void(sim::Scene&, const std::vector<double>&, double)>;
+
+// directional derivatives along d applied through `apply(scene, d, eps)`: central, forward, backward
+struct Differences {
+  double central, forward, backward;
+};
+Differences fd(const sim::Scene& s, const std::vector<double>& d, double eps, const Apply& apply) {
+  sim::Scene plus = s, minus = s;
+  apply(plus, d, eps);
+  apply(minus, d, -eps);
+  const double f0 = travel(s), fp = travel(plus), fm = travel(minus);
+  return {(fp - fm) / (2 * eps), (fp - f0) / eps, (f0 - fm) / eps};
+}
+
+// travel is piecewise smooth: a perturbation can move a mass across the adhesion band or a contact
+// branch, a jump that no derivative describes. Central differences must agree to 1e-4; where a jump
+// falls inside [−ε, ε] it falls on one side only, and the one-sided difference on the other side must
+// agree to 1e-3 (its truncation error is O(ε))
+::testing::AssertionResult agrees(double analytic, const Differences& n) {
+  auto rel = [&](double v) { return std::abs(analytic - v) / std::max({std::abs(analytic), std::abs(v), 1e-6}); };
+  if (rel(n.central) < 1e-4 || rel(n.forward) < 1e-3 || rel(n.backward) < 1e-3) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "reverse mode " << analytic << ", central " << n.central << ", forward "
+                                       << n.forward << ", backward " << n.backward;
+}
+
+double dot(const std::vector<double>& a, const std::vector<double>& b) {
+  double r = 0;
+  for (size_t i = 0; i < a.size(); ++i) r += a[i] * b[i];
+  return r;
+}
+
+std::vector<double> direction(size_t n, uint64_t seed) {
+  Rng rng = make_rng(seed, 2, n);
+  std::vector<double> d(n);
+  for (double& x : d) x = normal(rng);
+  const double norm = std::sqrt(dot(d, d));
+  for (double& x : d) x /= norm;
+  return d;
+}
+
+class Gradient : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Gradient, AllFourBlocksMatchCentralDifferences) {
+  const sim::Scene s = pair_in(GetParam());
+  sim::RunOptions opt;
+  opt.steps = kSteps;
+  opt.grad = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+
+  // the features under test are exercised
+  EXPECT_GT(r.contacts.floor, 0);
+  EXPECT_GT(r.contacts.sliding, 0) << "friction projection never active";
+  EXPECT_GT(r.contacts.toi, 0);
+  if (GetParam() == "treadmill") {
+    EXPECT_GT(r.contacts.belt, 0);
+  }
+  if (GetParam() == "step_up" || GetParam() == "obstacle") {
+    EXPECT_GT(r.contacts.wall, 0) << "no wall contact";
+  }
+
+  struct Block {
+    const char* name;
+    const std::vector<double>& grad;
+    Apply apply;
+    std::vector<double> mask;  // 1 where the direction may be nonzero
+  };
+  auto add = [](std::vector<double>& v, const std::vector<double>& d, double e) {
+    for (size_t i = 0; i < v.size(); ++i) v[i] += e * d[i];
+  };
+  // x0: masses resting exactly on the ground sit on the kink of the time-of-impact clamp (φ = 0), where
+  // the gradient is one-sided by definition; their y is left out of the direction (see DropTest below)
+  std::vector<double> x0_mask(s.x0.size(), 1.0);
+  for (int i = 0; i < s.n_masses(); ++i)
+    if (s.x0[2 * i + 1] == 0.0) x0_mask[2 * i + 1] = 0.0;
+  const std::vector<Block> blocks = {
+      {"agent_params", r.grad_agent_params, [&](sim::Scene& sc, auto& d, double e) { add(sc.agent_params, d, e); },
+       std::vector<double>(s.agent_params.size(), 1.0)},
+      {"connector_params", r.grad_connector_params,
+       [&](sim::Scene& sc, auto& d, double e) { add(sc.connector_params, d, e); },
+       std::vector<double>(s.connector_params.size(), 1.0)},
+      {"x0", r.grad_x0, [&](sim::Scene& sc, auto& d, double e) { add(sc.x0, d, e); }, x0_mask},
+      {"rest_length", r.grad_rest_length, [&](sim::Scene& sc, auto& d, double e) { add(sc.rest_length, d, e); },
+       std::vector<double>(s.rest_length.size(), 1.0)},
+  };
+  for (const Block& b : blocks) {
+    std::vector<double> d = direction(b.grad.size(), 5);
+    for (size_t i = 0; i < d.size(); ++i) d[i] *= b.mask[i];
+    EXPECT_TRUE(agrees(dot(b.grad, d), fd(s, d, 1e-7, b.apply))) << GetParam() << " " << b.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryEnvironment, Gradient, ::testing::ValuesIn(io::environment_names()),
+                         [](const auto& info) { return info.param; });
+
+// a body dropped from above: the landing goes through the time of impact, and the gradient with respect
+// to the drop height (x0.y) matches finite differences
+TEST(Gradient, LandingThroughTimeOfImpact) {
+  sim::Scene s = collective::agent_scene(fixture().p, "flat");
+  for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 0.05;
+  sim::RunOptions opt;
+  opt.steps = kSteps;
+  opt.grad = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok);
+  EXPECT_GT(r.contacts.toi, 0);
+  const std::vector<double> d = direction(s.x0.size(), 9);
+  const Differences n = fd(s, d, 1e-7, [](sim::Scene& sc, const std::vector<double>& dd, double e) {
+    for (size_t i = 0; i < sc.x0.size(); ++i) sc.x0[i] += e * dd[i];
+  });
+  EXPECT_TRUE(agrees(dot(r.grad_x0, d), n));
+}
+
+}  // namespace
+}  // namespace divcoll
