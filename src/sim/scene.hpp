@@ -90,6 +90,12 @@ int connector_param_count();                     // 1473
 // sorted terrain with segments at least 0.01 u wide, positive masses and rest lengths ...).
 // throws divcoll::InputError naming the first problem.
 void validate(const Scene& s);
+// the same with the finiteness of the controller parameters (agents/params, connector_params) optional:
+// a simulator given weights that training turned NaN can then end the episode with a status instead
+struct ValidateOptions {
+  bool finite_params = true;  // refuse NaN/Inf in agent_params and connector_params
+};
+void validate(const Scene& s, const ValidateOptions& opt);
 
 // Δt·sqrt(Σ k_s / m) at the worst mass (SPEC §2 stability rule; < 2 is stable)
 double stability_number(const Scene& s, double dt);

@@ -1,0 +1,127 @@
+// a small RAII layer over the HDF5 C API for the scene, trajectory and run files.
+//
+// Handles (hid_t) are closed in destructors and are move-only. HDF5's automatic error printing is
+// turned off; every failure becomes a divcoll::InputError whose message names the file and the object
+// ("runs/a.h5: masses/x0: ..."), with HDF5's own innermost reason appended where it has one.
+// Datasets are contiguous, written in one piece; files are opened for serial access unless the caller
+// passes a file access property list (e.g. an MPI-IO one).
+#pragma once
+
+#include <hdf5.h>
+
+#include <cstdint>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace divcoll::io::h5 {
+
+using Dims = std::vector<hsize_t>;
+
+// "(3, 11)"
+std::string dims_string(const Dims& d);
+
+// turns HDF5's automatic error printing off for this thread (called by File::open/create)
+void quiet_errors();
+
+// one HDF5 identifier and the function that closes it
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer close) : id_(id), close_(close) {}
+  ~Handle() { reset(); }
+  Handle(Handle&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = H5I_INVALID_HID; }
+  Handle& operator=(Handle&& o) noexcept;
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+
+  hid_t id() const { return id_; }
+  bool valid() const { return id_ >= 0; }
+  // closes now; returns false if HDF5 reported a failure
+  bool reset();
+
+ private:
+  hid_t id_ = H5I_INVALID_HID;
+  Closer close_ = nullptr;
+};
+
+// element types the dataset helpers handle
+template <class T>
+struct is_element : std::false_type {};
+template <>
+struct is_element<double> : std::true_type {};
+template <>
+struct is_element<int32_t> : std::true_type {};
+template <>
+struct is_element<int64_t> : std::true_type {};
+template <>
+struct is_element<uint8_t> : std::true_type {};
+
+// a file or a group: the object plus the names its error messages use
+class Node {
+ public:
+  hid_t id() const { return handle_.id(); }
+  const std::string& file() const { return file_; }
+  // "/" for the root, else "/env" etc.
+  const std::string& name() const { return name_; }
+  // "<file>: <path of child relative to the root>", the prefix of every error message
+  std::string where(const std::string& child = "") const;
+
+  // true if `path` (relative, may contain '/') leads to an object
+  bool has(const std::string& path) const;
+  bool has_attribute(const std::string& attr) const;
+
+  // groups (create makes missing intermediate groups too)
+  Node group(const std::string& path) const;
+  Node create_group(const std::string& path) const;
+
+  // scalar attributes on this object; writing replaces an existing attribute of the same name
+  void write_double(const std::string& attr, double v) const;
+  void write_int(const std::string& attr, int64_t v) const;
+  void write_string(const std::string& attr, const std::string& v) const;  // variable-length UTF-8
+  double read_double(const std::string& attr) const;                       // float or integer attribute
+  int64_t read_int(const std::string& attr) const;                         // integer attribute
+  std::string read_string(const std::string& attr) const;                  // fixed or variable length
+
+  // datasets of double/int32/int64/uint8 (path may contain '/'; missing groups are created).
+  // data.size() must be the product of dims; an existing dataset of that name is an error.
+  template <class T>
+  void write(const std::string& path, const std::vector<T>& data, const Dims& dims) const;
+  // dims of a dataset; InputError naming it if it is missing or not a dataset
+  Dims dims(const std::string& path) const;
+  // the whole dataset converted to T (a float dataset is refused for integer T)
+  template <class T>
+  std::vector<T> read(const std::string& path, Dims* dims_out = nullptr) const;
+  // the same, refused unless its dims equal `expected`
+  template <class T>
+  std::vector<T> read(const std::string& path, const Dims& expected) const;
+
+ protected:
+  Node(Handle h, std::string file, std::string name)
+      : handle_(std::move(h)), file_(std::move(file)), name_(std::move(name)) {}
+  Handle handle_;
+  std::string file_, name_;
+
+  // the object path of `child` relative to the root, for messages
+  std::string path_of(const std::string& child) const;
+  static std::string absolute(const std::string& p);
+};
+
+class File : public Node {
+ public:
+  // creates a new file; refuses an existing one unless overwrite is set (then it is truncated)
+  static File create(const std::string& path, bool overwrite, hid_t fapl = H5P_DEFAULT);
+  // opens an existing HDF5 file; "X does not exist" / "X is not an HDF5 file" otherwise
+  static File open(const std::string& path, bool writable = false, hid_t fapl = H5P_DEFAULT);
+  // flushes and closes, throwing if HDF5 reports a failure (the destructor closes silently)
+  void close();
+  // closes ignoring failures (e.g. before removing a half-written file); never throws
+  void close_quietly() noexcept { handle_.reset(); }
+
+ private:
+  using Node::Node;
+};
+
+}  // namespace divcoll::io::h5
