@@ -1,3 +1,67 @@
-// divcoll: command-line entry point (filled in by the CLI work)
+// divcoll: command-line entry point. Every subcommand lives in src/cli; this file only parses.
+#include <CLI/CLI.hpp>
 #include <cstdio>
-int main() { std::puts("divcoll"); return 0; }
+#include <exception>
+
+#include "cli/commands.hpp"
+#include "common/check.hpp"
+
+int main(int argc, char** argv) {
+  using namespace divcoll;
+  CLI::App app{"divcoll: morphological diversity within machines (Hein & Bongard), reproduced"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(DIVCOLL_VERSION) + " (" DIVCOLL_GIT_COMMIT ")");
+
+  cli::SimulateArgs sim;
+  auto* s = app.add_subcommand("simulate", "simulate a scene file and write its trajectory file (SPEC §9)");
+  s->add_option("--scene", sim.scene, "scene file (HDF5)")->required()->check(CLI::ExistingFile);
+  s->add_option("--steps", sim.steps, "control steps T")->required()->check(CLI::Range(1, 10000000));
+  s->add_option("--out", sim.out, "trajectory file to write")->required();
+  s->add_flag("--grad", sim.grad, "also write the gradient of travel (grad/*)");
+  s->add_flag("--force", sim.force, "overwrite an existing output file");
+
+  cli::SceneArgs sc;
+  auto* c = app.add_subcommand("scene", "write the scene file of an agent, a pair or a chain in an environment");
+  c->add_option("--kind", sc.kind, "agent, pair or chain")->check(CLI::IsMember({"agent", "pair", "chain"}));
+  c->add_option("--env", sc.env, "environment name (see `divcoll envs`)");
+  c->add_option("--out", sc.out, "scene file to write")->required();
+  c->add_option("--agents", sc.agents, "agents in a chain")->check(CLI::Range(2, 1000));
+  c->add_option("--seed", sc.seed, "random seed for agents and connector");
+  c->add_option("--connector", sc.connector, "weak or strong")->check(CLI::IsMember({"weak", "strong"}));
+  c->add_flag("--uniform", sc.uniform, "clones of one agent instead of different agents");
+  c->add_flag("--force", sc.force, "overwrite an existing output file");
+
+  cli::DemoArgs demo;
+  auto* d = app.add_subcommand("demo", "a pair on flat ground and in a novel environment, travel in body lengths");
+  d->add_option("--out", demo.out, "output folder");
+  d->add_option("--env", demo.env, "the novel environment");
+  d->add_option("--seed", demo.seed, "random seed");
+  d->add_option("--steps", demo.steps, "steps per episode")->check(CLI::Range(1, 10000000));
+
+  cli::BenchArgs bench;
+  auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
+  b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
+  b->add_flag("--quick", bench.quick, "fewer rows");
+
+  auto* e = app.add_subcommand("envs", "list the built-in environments");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& err) {
+    return app.exit(err);
+  }
+  try {
+    if (*s) return cli::simulate(sim);
+    if (*c) return cli::scene(sc);
+    if (*d) return cli::demo(demo);
+    if (*b) return cli::bench(bench);
+    if (*e) return cli::envs();
+  } catch (const InputError& err) {
+    std::fprintf(stderr, "divcoll: error: %s\n", err.what());
+    return 2;
+  } catch (const std::exception& err) {
+    std::fprintf(stderr, "divcoll: failed: %s\n", err.what());
+    return 1;
+  }
+  return 0;
+}

@@ -107,7 +107,8 @@ RunResult simulate(const Scene& scene, const RunOptions& opt) {
 }
 
 RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
-  validate(sc);
+  // non-finite controller weights are not refused here: they end the episode with status nan
+  validate(sc, ValidateOptions{.finite_params = false});
   DIVCOLL_THROW_UNLESS(opt.steps >= 1, "steps must be at least 1 (got " << opt.steps << ")");
   DIVCOLL_THROW_UNLESS(opt.hidden_every >= 1, "hidden_every must be at least 1 (got " << opt.hidden_every << ")");
 

@@ -112,6 +112,9 @@ void validate_environment(const Environment& e) {
                                                                              << t[k].slope
                                                                              << ", outside [-10, 10]");
   }
+  // the first segment extends to -inf, so its line must not depend on its (ignored) x_start
+  DIVCOLL_THROW_UNLESS(t[0].slope == 0, "env/terrain: segment 0 has slope " << t[0].slope
+                                            << "; the first segment extends to -inf and must be flat (slope 0)");
   // segment 1's left neighbour extends to -inf, so the width rule starts at segment 2; the tolerance
   // absorbs the rounding of x_f + dx when tables are placed
   constexpr double kMinWidth = 0.01, kTol = 1e-12;

@@ -1,0 +1,129 @@
+// divcoll bench: throughput of the engine (steps per second per core) and speed against error.
+// Prints markdown tables; it is a benchmark, not a test: nothing here passes or fails.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "collective/builders.hpp"
+#include "morph/body.hpp"
+#include "sim/engine.hpp"
+
+namespace divcoll::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Fixture {
+  std::vector<collective::Agent> agents;
+  std::vector<double> conn;
+};
+
+Fixture make_fixture(int n_agents, uint64_t seed) {
+  Fixture f;
+  Rng rng(seed_for(seed, 99, 0));
+  for (int q = 0; q < n_agents; ++q) {
+    f.agents.push_back(collective::random_agent(rng));
+    f.agents.back().anchors = collective::compute_anchors(f.agents.back(), {}, 300);
+  }
+  f.conn = morph::init_connector_params(rng);
+  return f;
+}
+
+// scene b of a batch of the given kind: agents drawn round-robin from the fixture
+sim::Scene make_scene(const Fixture& f, const std::string& kind, int b, const sim::Constants& c = {}) {
+  const int n = static_cast<int>(f.agents.size());
+  if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", c);
+  if (kind == "pair")
+    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, collective::kWeakConnector, "flat", c);
+  std::vector<const collective::Agent*> chain;
+  for (int q = 0; q < 20; ++q) chain.push_back(&f.agents[(b + q) % n]);
+  return collective::chain_scene(chain, f.conn, collective::kWeakConnector, "flat", c);
+}
+
+// runs batches until `seconds` have passed; returns scene-steps per second
+double time_batch(sim::Simulator& sim, const std::vector<sim::Scene>& batch, int steps, bool grad, double seconds) {
+  sim::RunOptions opt;
+  opt.steps = steps;
+  opt.grad = grad;
+  sim.run_batch({batch.front()}, opt);  // warm up: size the workspace
+  long done = 0;
+  const auto t0 = Clock::now();
+  double el = 0;
+  do {
+    sim.run_batch(batch, opt);
+    done += static_cast<long>(batch.size()) * steps;
+    el = std::chrono::duration<double>(Clock::now() - t0).count();
+  } while (el < seconds);
+  return done / el;
+}
+
+}  // namespace
+
+int bench(const BenchArgs& a) {
+  std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
+              DIVCOLL_GIT_COMMIT);
+  const Fixture f = make_fixture(24, 7);
+
+  // ---- throughput --------------------------------------------------------------------------------
+  std::printf("## Throughput: scene-steps per second per core\n\n");
+  std::printf("| scene | masses | batch | steps/episode | forward | forward+backward | fwd+bwd µs/step |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  struct Row {
+    const char* kind;
+    int steps;
+  };
+  const Row rows[] = {{"agent", 1000}, {"pair", 1000}, {"chain20", 200}};
+  for (const Row& r : rows) {
+    for (int batch : {1, 100}) {
+      if (a.quick && batch == 100 && std::string(r.kind) == "chain20") continue;
+      std::vector<sim::Scene> scenes;
+      for (int b = 0; b < batch; ++b) scenes.push_back(make_scene(f, r.kind, b));
+      sim::Simulator sim;
+      const double fwd = time_batch(sim, scenes, r.steps, false, a.seconds);
+      const double bwd = time_batch(sim, scenes, r.steps, true, a.seconds);
+      std::printf("| %s | %d | %d | %d | %.0f | %.0f | %.1f |\n", r.kind, scenes[0].n_masses(), batch, r.steps, fwd,
+                  bwd, 1e6 / bwd);
+      std::fflush(stdout);
+    }
+  }
+
+  // ---- speed against error -----------------------------------------------------------------------
+  // the same pair for 1 s of simulated time at several Δt; α is rescaled to keep the actuation filter's
+  // time constant (α(Δt) = 1 − (1 − α)^(Δt/0.004)); error = largest position deviation at t = 1 s
+  // against a reference at Δt = 0.000125 s (the smallest Δt / 8)
+  std::printf("\n## Speed against error: one pair, 1 s of simulated time, flat ground\n\n");
+  std::printf("| Δt (s) | substeps | steps | pair-steps/s (fwd) | simulated s per wall s | max position error (u) |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  auto constants_for = [](double dt) {
+    sim::Constants c;
+    c.dt = dt;
+    c.agent_alpha = 1.0 - std::pow(1.0 - 0.15, dt / 0.004);
+    c.conn_alpha = 1.0 - std::pow(1.0 - 0.1, dt / 0.004);
+    return c;
+  };
+  auto final_x = [&](double dt) {
+    const sim::Scene s = make_scene(f, "pair", 0, constants_for(dt));
+    sim::RunOptions opt;
+    opt.steps = static_cast<int>(std::lround(1.0 / dt));
+    opt.record = true;
+    const sim::RunResult r = sim::simulate(s, opt);
+    return std::vector<double>(r.x.end() - 2 * s.n_masses(), r.x.end());
+  };
+  const std::vector<double> ref = final_x(0.000125);
+  for (double dt : {0.001, 0.002, 0.004, 0.008}) {
+    const sim::Scene s = make_scene(f, "pair", 0, constants_for(dt));
+    const std::vector<double> x = final_x(dt);
+    double err = 0;
+    for (size_t q = 0; q < x.size(); ++q) err = std::max(err, std::abs(x[q] - ref[q]));
+    sim::Simulator sim;
+    const int steps = static_cast<int>(std::lround(1.0 / dt));
+    const double sps = time_batch(sim, {s}, steps, false, a.seconds);
+    std::printf("| %.3f | %d | %d | %.0f | %.1f | %.2e |\n", dt, sim::substeps_needed(s), steps, sps, sps * dt, err);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}  // namespace divcoll::cli

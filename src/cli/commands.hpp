@@ -1,0 +1,50 @@
+// the subcommands of `divcoll` (mpi/main.cpp registers them with CLI11)
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace divcoll::cli {
+
+// divcoll simulate --scene S.h5 --steps T --out TRAJ.h5 [--grad] [--force]
+struct SimulateArgs {
+  std::string scene, out;
+  int steps = 1000;
+  bool grad = false;
+  bool force = false;
+};
+int simulate(const SimulateArgs& a);
+
+// divcoll scene --kind agent|pair|chain --env NAME --out S.h5 [--agents N] [--seed S] [--connector weak|strong]
+//               [--uniform] [--force]
+struct SceneArgs {
+  std::string kind = "pair", env = "flat", out, connector = "weak";
+  int agents = 2;
+  uint64_t seed = 1;
+  bool uniform = false;
+  bool force = false;
+};
+int scene(const SceneArgs& a);
+
+// divcoll demo --out DIR: a pair on flat and in a novel environment, simulated, travel in body lengths
+struct DemoArgs {
+  std::string out = "out/demo", env = "step_up";
+  uint64_t seed = 1;
+  int steps = 1000;
+};
+int demo(const DemoArgs& a);
+
+// divcoll bench: steps per second per core and speed against error
+struct BenchArgs {
+  double seconds = 0.5;  // minimum timed wall time per row
+  bool quick = false;    // fewer rows
+};
+int bench(const BenchArgs& a);
+
+// divcoll envs: the built-in environments
+int envs();
+
+// refuses to overwrite an existing file unless forced
+void check_output_path(const std::string& path, bool force);
+
+}  // namespace divcoll::cli
