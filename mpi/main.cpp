@@ -45,10 +45,22 @@ int main(int argc, char** argv) {
 
   auto* e = app.add_subcommand("envs", "list the built-in environments");
 
+  // a mistyped command is named, with the list of commands
+  std::string known;
+  bool found = false;
+  for (const auto* sub : app.get_subcommands({})) {
+    known += (known.empty() ? "" : ", ") + sub->get_name();
+    found = found || (argc > 1 && sub->get_name() == argv[1]);
+  }
+  if (argc > 1 && argv[1][0] != '-' && !found) {
+    std::fprintf(stderr, "divcoll: error: unknown command '%s' (commands: %s)\n", argv[1], known.c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
-    return app.exit(err);
+    // --help and --version exit 0; every misuse exits 2, like every other bad input
+    return app.exit(err) == 0 ? 0 : 2;
   }
   try {
     if (*s) return cli::simulate(sim);

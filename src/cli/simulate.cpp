@@ -48,7 +48,7 @@ int simulate(const SimulateArgs& a) {
     t.grad_x0 = r.grad_x0;
     t.grad_rest_length = r.grad_rest_length;
   }
-  io::write_trajectory(a.out, t);
+  io::write_trajectory(a.out, t, a.force);
   std::printf("%s: %d steps (%d substeps each), status %s, travel %.6f u = %.4f BL%s\n", a.out.c_str(), a.steps,
               r.substeps, t.status.c_str(), r.travel, r.travel / sim::mean_body_length(scene),
               a.grad ? ", with gradients" : "");
@@ -90,7 +90,7 @@ int scene(const SceneArgs& a) {
     s = a.kind == "pair" ? collective::pair_scene(*ptr[0], *ptr[1], conn, k, a.env)
                          : collective::chain_scene(ptr, conn, k, a.env);
   }
-  io::write_scene(a.out, s);
+  io::write_scene(a.out, s, a.force);
   std::printf("%s: %s of %d agent(s) in %s, %d masses, %d springs, %d connector(s), %d substep(s)\n",
               a.out.c_str(), a.kind.c_str(), s.n_agents(), a.env.c_str(), s.n_masses(), s.n_springs(),
               s.n_connectors(), sim::substeps_needed(s));
@@ -111,7 +111,7 @@ int demo(const DemoArgs& a) {
   for (const std::string& env : {std::string("flat"), a.env}) {
     const sim::Scene s = collective::pair_scene(P, A, conn, collective::kWeakConnector, env);
     const std::string path = (fs::path(a.out) / ("pair_" + env + ".h5")).string();
-    io::write_scene(path, s);
+    io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
     sim::RunOptions opt;
     opt.steps = a.steps;
     const sim::RunResult r = sim::simulate(s, opt);
