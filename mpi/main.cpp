@@ -45,6 +45,13 @@ int main(int argc, char** argv) {
 
   auto* e = app.add_subcommand("envs", "list the built-in environments");
 
+  cli::GdCompareArgs gdc;
+  auto* g = app.add_subcommand("gd-compare", "measure the gradient rules of SPEC §4.4 on the same random agents");
+  g->add_option("--agents", gdc.agents, "random agents")->check(CLI::Range(2, 100000));
+  g->add_option("--epochs", gdc.epochs, "epochs per agent")->check(CLI::Range(1, 100000));
+  g->add_option("--steps", gdc.steps, "steps per episode")->check(CLI::Range(1, 10000000));
+  g->add_option("--seed", gdc.seed, "seed");
+
   // a mistyped command is named, with the list of commands
   std::string known;
   bool found = false;
@@ -68,6 +75,7 @@ int main(int argc, char** argv) {
     if (*d) return cli::demo(demo);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
+    if (*g) return cli::gd_compare(gdc);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());
     return 2;

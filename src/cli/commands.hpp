@@ -41,6 +41,13 @@ struct BenchArgs {
 };
 int bench(const BenchArgs& a);
 
+// divcoll gd-compare: gradient rules on the same random agents
+struct GdCompareArgs {
+  int agents = 20, epochs = 15, steps = 1000;
+  uint64_t seed = 1;
+};
+int gd_compare(const GdCompareArgs& a);
+
 // divcoll envs: the built-in environments
 int envs();
 

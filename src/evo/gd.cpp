@@ -1,0 +1,152 @@
+#include "evo/gd.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/check.hpp"
+
+namespace divcoll::evo {
+
+GdRule gd_rule_from(const std::string& name) {
+  if (name == "paper") return GdRule::paper;
+  if (name == "keep_best") return GdRule::keep_best;
+  if (name == "adam") return GdRule::adam;
+  throw InputError(msg() << "unknown gradient rule '" << name << "' (paper, keep_best or adam)");
+}
+
+const char* gd_rule_name(GdRule r) {
+  switch (r) {
+    case GdRule::paper: return "paper";
+    case GdRule::keep_best: return "keep_best";
+    case GdRule::adam: return "adam";
+  }
+  return "?";
+}
+
+double body_length(const collective::Agent& a) {
+  double lo = a.rest_pos[0], hi = a.rest_pos[0];
+  for (int q = 0; q < sim::kAgentMasses; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
+  return hi - lo;
+}
+
+bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta, const GdOptions& opt) {
+  const double lo = opt.rest_length_min * 0.05, hi = opt.rest_length_max * 0.05;
+  double scale = 1.0;
+  for (int attempt = 0; attempt < 5; ++attempt, scale *= 0.5) {
+    collective::Agent b = a;
+    for (size_t q = 0; q < b.rest_pos.size(); ++q) b.rest_pos[q] += scale * delta[q];
+    collective::update_rest_lengths(b);
+    bool ok = true;
+    for (double L : b.rest_length) ok = ok && L >= lo && L <= hi;
+    if (!ok) continue;
+    // keep min x = 0 and the lowest mass at y = 0
+    double mx = b.rest_pos[0], my = b.rest_pos[1];
+    for (int q = 0; q < sim::kAgentMasses; ++q) mx = std::min(mx, b.rest_pos[2 * q]), my = std::min(my, b.rest_pos[2 * q + 1]);
+    for (int q = 0; q < sim::kAgentMasses; ++q) b.rest_pos[2 * q] -= mx, b.rest_pos[2 * q + 1] -= my;
+    a = std::move(b);
+    return true;
+  }
+  return false;
+}
+
+namespace {
+
+struct Eval {
+  double travel = std::numeric_limits<double>::quiet_NaN();
+  sim::Status status = sim::Status::ok;
+  std::vector<double> g_params, g_rest;  // gradient of travel
+};
+
+Eval evaluate(const collective::Agent& a, const GdOptions& opt, sim::Simulator& sim, bool grad) {
+  const sim::Scene s = collective::agent_scene(a, "flat");
+  sim::RunOptions ro;
+  ro.steps = opt.steps;
+  ro.grad = grad;
+  sim::RunResult r = sim.run(s, ro);
+  Eval e;
+  e.status = r.status;
+  if (r.status != sim::Status::ok) return e;
+  e.travel = r.travel;
+  if (!grad) return e;
+  e.g_params = std::move(r.grad_agent_params);
+  // rest positions enter through x(0) (a translation of them) and through the rest lengths
+  e.g_rest = r.grad_x0;
+  for (int q = 0; q < sim::kAgentSprings; ++q) {
+    const int i = a.spring_i[q], j = a.spring_j[q];
+    const double dx = a.rest_pos[2 * i] - a.rest_pos[2 * j], dy = a.rest_pos[2 * i + 1] - a.rest_pos[2 * j + 1];
+    const double L = std::sqrt(dx * dx + dy * dy);
+    const double g = r.grad_rest_length[q];
+    e.g_rest[2 * i] += g * dx / L;
+    e.g_rest[2 * i + 1] += g * dy / L;
+    e.g_rest[2 * j] -= g * dx / L;
+    e.g_rest[2 * j + 1] -= g * dy / L;
+  }
+  return e;
+}
+
+double norm(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim) {
+  TrainResult out;
+  const size_t P = a.params.size();
+  std::vector<double> m(P, 0.0), v(P, 0.0);  // Adam moments
+  collective::Agent best = a;
+  double best_travel = -std::numeric_limits<double>::infinity();
+  sim::Status last_status = sim::Status::ok;
+  for (int epoch = 0; epoch <= opt.epochs; ++epoch) {
+    const bool update = epoch < opt.epochs;
+    const Eval e = evaluate(a, opt, sim, update);
+    out.curve_u.push_back(e.travel);
+    last_status = e.status;
+    if (e.status != sim::Status::ok) break;  // keep what we had before this step
+    if (e.travel > best_travel) best_travel = e.travel, best = a;
+    if (!update) break;
+    // weights: a normalized ascent step, or Adam
+    const double gn = norm(e.g_params);
+    if (opt.rule == GdRule::adam) {
+      const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
+      const double c1 = 1 - std::pow(b1, epoch + 1), c2 = 1 - std::pow(b2, epoch + 1);
+      for (size_t q = 0; q < P; ++q) {
+        m[q] = b1 * m[q] + (1 - b1) * e.g_params[q];
+        v[q] = b2 * v[q] + (1 - b2) * e.g_params[q] * e.g_params[q];
+        a.params[q] += opt.adam_lr * (m[q] / c1) / (std::sqrt(v[q] / c2) + eps);
+      }
+    } else if (gn > 0) {
+      for (size_t q = 0; q < P; ++q) a.params[q] += opt.step * e.g_params[q] / gn;
+    }
+    // rest positions: the mass with the largest gradient moves rest_move_max
+    if (opt.rest_moves) {
+      double gmax = 0;
+      for (int q = 0; q < sim::kAgentMasses; ++q) gmax = std::max(gmax, std::hypot(e.g_rest[2 * q], e.g_rest[2 * q + 1]));
+      if (gmax > 0) {
+        std::vector<double> delta(e.g_rest.size());
+        for (size_t q = 0; q < delta.size(); ++q) delta[q] = opt.rest_move_max * e.g_rest[q] / gmax;
+        move_rest_positions(a, delta, opt);
+      }
+    }
+  }
+  // the paper's rule keeps the last parameters; the others the best seen
+  const bool last_ok = last_status == sim::Status::ok;
+  if (opt.rule != GdRule::paper || !last_ok) {
+    if (best_travel > -std::numeric_limits<double>::infinity()) {
+      a = best;
+      out.travel_u = best_travel;
+    } else {
+      out.travel_u = std::numeric_limits<double>::quiet_NaN();
+      out.status = last_status;
+    }
+  } else {
+    out.travel_u = out.curve_u.back();
+  }
+  out.fitness_bl = out.travel_u / body_length(a);
+  return out;
+}
+
+}  // namespace divcoll::evo

@@ -1,0 +1,51 @@
+// gradient descent on one agent (SPEC §4.4): controller weights and rest positions, the latter through
+// both x(0) and the rest lengths, with the position constraints
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "sim/engine.hpp"
+
+namespace divcoll::evo {
+
+// how the parameters step each epoch
+enum class GdRule {
+  paper,      // θ ← θ + step·g/‖g‖ (ascent on travel), the last parameters are kept
+  keep_best,  // the same steps, but the best parameters seen are kept (default: see README, measured)
+  adam,       // Adam on θ with learning rate adam_lr; the best parameters seen are kept
+};
+GdRule gd_rule_from(const std::string& name);  // "paper", "keep_best", "adam"; InputError otherwise
+const char* gd_rule_name(GdRule r);
+
+struct GdOptions {
+  int epochs = 15;                 // gradient evaluations and updates
+  int steps = 1000;                // steps per episode on flat ground
+  GdRule rule = GdRule::keep_best;
+  double step = 0.16;              // normalized step of the weights
+  double adam_lr = 0.01;
+  bool rest_moves = true;          // whether rest positions are trained
+  double rest_move_max = 0.002;    // u, largest move of any mass per epoch
+  double rest_length_min = 0.5;    // × 0.05 u
+  double rest_length_max = 1.5;    // × 0.05 u
+};
+
+struct TrainResult {
+  double travel_u = 0;             // travel of the kept parameters, u
+  double fitness_bl = 0;           // travel_u / body length
+  sim::Status status = sim::Status::ok;
+  std::vector<double> curve_u;     // travel at each evaluation, epochs + 1 values (NaN where not ok)
+};
+
+// body length of an agent (max x − min x of its rest positions), u
+double body_length(const collective::Agent& a);
+
+// trains `a` in place and returns its fitness; `sim` is reused workspace
+TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim);
+
+// moves rest positions by `delta` (11×2) if every rest length stays within the bounds (halving the move
+// up to 4 times otherwise), then shifts so that min x = min y = 0; returns whether it moved
+bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta, const GdOptions& opt);
+
+}  // namespace divcoll::evo
