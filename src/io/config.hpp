@@ -1,0 +1,131 @@
+// the run configuration of `divcoll evolve CONFIG` / `divcoll run CONFIG`: a TOML file with the sections
+// [run] [agents] [connectors] [deploy] [specialists] [scaling] [graded] [output].
+//
+// One schema table in config.cpp lists every key (type, default, allowed range or values, unit, doc);
+// parsing, checking, the resolved TOML echo, the flat key/value list for HDF5 attributes and the README
+// table all come from it. Defaults are the paper's counts (SPEC §4.4, §6.4, §7).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace divcoll::io {
+
+// every value of a run; get one from default_config() or parse_config(), never from a bare RunConfig{}
+// (that is all zeros and fails validate)
+struct RunConfig {
+  struct Run {
+    std::uint64_t seed{};  // run seed: every draw is seeded by (seed, stage, item)
+    std::string name;      // run name, used in output file names
+    std::vector<std::string>
+        stages;                 // stages to run, from agents connectors deploy specialists scaling graded
+    double progress_every_s{};  // seconds between progress lines (0 = none)
+    bool operator==(const Run&) const = default;
+  };
+  struct Agents {
+    int population{};          // agents per population
+    int generations{};         // generations of evolution after generation 0
+    int epochs{};              // GD epochs per training
+    int episode_steps{};       // steps of one training rollout
+    std::string gd_rule;       // paper | keep_best | adam
+    double gd_step{};          // normalized-gradient step θ ← θ − step·g/‖g‖
+    double adam_lr{};          // Adam learning rate (gd_rule = adam)
+    double rest_move_max{};    // u per epoch, largest rest-position move
+    double rest_length_min{};  // × 0.05 u, shortest rest length
+    double rest_length_max{};  // × 0.05 u, longest rest length
+    double body_flip_p{};      // per body bit
+    double spring_flip_p{};    // per spring bit
+    double rest_jitter_sd{};   // u, offspring rest-position jitter
+    int uniqueness_k{};        // nearest neighbours in the uniqueness score
+    bool body_fixed{};         // one body shape for all (graded-diversity variant, SPEC §7.5)
+    bool springs_fixed{};      // one spring genotype for all
+    bool rest_moves{};         // GD moves rest positions
+    bool operator==(const Agents&) const = default;
+  };
+  struct Connectors {
+    int replicates{};                // connectors trained per kind
+    int iterations{};                // optimizer steps per connector
+    int batch_pairs{};               // pairs per batch
+    int episode_steps{};             // steps of one training rollout
+    double weak_stiffness{};         // spring stiffness of weak connectors
+    double strong_stiffness{};       // spring stiffness of strong connectors
+    std::string optimizer;           // adam | normalized
+    double lr{};                     // learning rate (Adam) or step (normalized)
+    double clip_norm{};              // global gradient norm clip
+    std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
+    bool operator==(const Connectors&) const = default;
+  };
+  struct Deploy {
+    int episode_steps{};                    // steps of one deployment episode
+    int pairs{};                            // pairs per connector replicate
+    std::vector<std::string> environments;  // names from configs/environments.toml, flat among them
+    int hidden_subsample{};                 // hidden states kept per environment (0 = all)
+    bool operator==(const Deploy&) const = default;
+  };
+  struct Specialists {
+    int replicates{};  // connectors per novel environment
+    int iterations{};  // optimizer steps per connector
+    bool operator==(const Specialists&) const = default;
+  };
+  struct Scaling {
+    std::vector<int> sizes;  // chain sizes N
+    int draws{};             // diverse chains per replicate and size
+    int episode_steps{};     // steps of one chain episode
+    bool operator==(const Scaling&) const = default;
+  };
+  struct Graded {
+    bool enabled{};    // run the graded-diversity populations
+    int population{};  // agents per graded population
+    bool operator==(const Graded&) const = default;
+  };
+  struct Output {
+    std::string dir;         // directory of run files
+    int checkpoint_every{};  // generations / iterations between checkpoints
+    bool operator==(const Output&) const = default;
+  };
+
+  Run run;
+  Agents agents;
+  Connectors connectors;
+  Deploy deploy;
+  Specialists specialists;
+  Scaling scaling;
+  Graded graded;
+  Output output;
+
+  bool operator==(const RunConfig&) const = default;
+};
+
+// the defaults of the schema (the paper's counts)
+RunConfig default_config();
+
+// parses a TOML text, then applies `overrides` ("section.key=value", value in TOML syntax; a bare word
+// is taken as a string, a comma list as a list), then runs validate(). Keys left out keep their default.
+// Throws InputError naming the key on an unknown section or key (with the nearest known key), a wrong type,
+// an out-of-range value or an impossible combination. `origin` names the source in messages.
+RunConfig parse_config(const std::string& toml_text, const std::string& origin,
+                       const std::vector<std::string>& overrides = {});
+// reads and parses the file at `path` (InputError if it cannot be read)
+RunConfig load_config(const std::string& path, const std::vector<std::string>& overrides = {});
+// applies "section.key=value" overrides to a resolved config, with the same checks
+RunConfig apply_overrides(const RunConfig& cfg, const std::vector<std::string>& overrides);
+
+// checks every key's range and every cross-key rule; throws InputError naming the keys
+void validate(const RunConfig& cfg);
+
+// whether a stage runs: listed in run.stages (and, for "graded", graded.enabled)
+bool stage_enabled(const RunConfig& cfg, const std::string& stage);
+
+// the fully resolved config as TOML, every key with its doc as a comment; parses back to `cfg`
+std::string to_toml(const RunConfig& cfg);
+// ("section.key", value) for every key in schema order: numbers and booleans as in TOML, strings bare,
+// lists as TOML arrays; every pair is also a valid override, so apply_overrides(default, flat(c)) == c
+std::vector<std::pair<std::string, std::string>> flat(const RunConfig& cfg);
+// every key as "section.key", in schema order
+std::vector<std::string> config_keys();
+// a markdown table of every key: key, type, default, allowed, unit, meaning
+std::string schema_markdown();
+
+}  // namespace divcoll::io

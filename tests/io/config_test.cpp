@@ -1,0 +1,403 @@
+// the run configuration: presets parse, paper.toml is the defaults, bad keys, types, ranges and impossible
+// combinations are refused naming the key, overrides get the same checks, and to_toml / flat round-trip
+#include "io/config.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "common/check.hpp"
+#include "io/environments.hpp"
+#include "testing.hpp"
+
+namespace divcoll::io {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+std::string preset(const std::string& name) { return testing::source_dir() + "/configs/" + name; }
+
+// the message of the InputError that parsing `text` raises (a test failure if it is accepted)
+std::string refusal(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_config(text, "test.toml", overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted:\n" << text;
+  return "";
+}
+
+// flat() of two configs, key by key, so a failure names the key
+void expect_same(const RunConfig& a, const RunConfig& b) {
+  const auto fa = flat(a), fb = flat(b);
+  ASSERT_EQ(fa.size(), fb.size());
+  for (size_t i = 0; i < fa.size(); ++i) {
+    EXPECT_EQ(fa[i].first, fb[i].first);
+    EXPECT_EQ(fa[i].second, fb[i].second) << fa[i].first;
+  }
+  EXPECT_TRUE(a == b);
+}
+
+TEST(ConfigPresets, AllParse) {
+  for (const char* name : {"paper.toml", "quick.toml", "tiny.toml"}) {
+    EXPECT_NO_THROW(load_config(preset(name))) << name;
+  }
+  const RunConfig tiny = load_config(preset("tiny.toml"));
+  EXPECT_EQ(tiny.agents.population, 6);
+  EXPECT_EQ(tiny.agents.generations, 2);
+  EXPECT_EQ(tiny.agents.epochs, 2);
+  EXPECT_EQ(tiny.agents.episode_steps, 100);
+  EXPECT_EQ(tiny.run.name, "tiny");
+}
+
+TEST(ConfigPresets, PaperIsTheDefaults) {
+  const RunConfig paper = load_config(preset("paper.toml"));
+  expect_same(paper, default_config());
+  // and the defaults are the paper's counts
+  const RunConfig& d = paper;
+  EXPECT_EQ(d.run.seed, 1u);
+  EXPECT_EQ(d.run.stages.size(), 6u);
+  EXPECT_EQ(d.agents.population, 100);
+  EXPECT_EQ(d.agents.generations, 15);
+  EXPECT_EQ(d.agents.epochs, 15);
+  EXPECT_EQ(d.agents.episode_steps, 1000);
+  EXPECT_EQ(d.agents.gd_step, 0.16);
+  EXPECT_EQ(d.agents.body_flip_p, 1.0 / 28);
+  EXPECT_EQ(d.agents.spring_flip_p, 1.0 / 21);
+  EXPECT_EQ(d.agents.uniqueness_k, 5);
+  EXPECT_EQ(d.connectors.weak_stiffness, 5000.0);
+  EXPECT_EQ(d.connectors.strong_stiffness, 30000.0);
+  EXPECT_EQ(d.connectors.lr, 3e-3);
+  EXPECT_EQ(d.connectors.kinds.size(), 4u);
+  EXPECT_EQ(d.deploy.environments, environment_names());
+  EXPECT_EQ(d.deploy.episode_steps, 3000);
+  EXPECT_EQ(d.scaling.sizes, (std::vector<int>{5, 10, 20}));
+  EXPECT_TRUE(d.graded.enabled);
+  EXPECT_EQ(d.output.dir, "runs");
+}
+
+TEST(ConfigPresets, QuickIsTheDemoScale) {
+  const RunConfig q = load_config(preset("quick.toml"));
+  EXPECT_EQ(q.agents.population, 12);
+  EXPECT_EQ(q.agents.generations, 3);
+  EXPECT_EQ(q.agents.epochs, 6);
+  EXPECT_EQ(q.agents.episode_steps, 400);
+  EXPECT_EQ(q.connectors.replicates, 2);
+  EXPECT_EQ(q.connectors.iterations, 8);
+  EXPECT_EQ(q.connectors.batch_pairs, 8);
+  EXPECT_EQ(q.connectors.episode_steps, 400);
+  EXPECT_EQ(q.deploy.pairs, 8);
+  EXPECT_EQ(q.deploy.episode_steps, 800);
+  EXPECT_EQ(q.specialists.replicates, 1);
+  EXPECT_EQ(q.specialists.iterations, 4);
+  EXPECT_EQ(q.scaling.sizes, (std::vector<int>{3, 5}));
+  EXPECT_EQ(q.scaling.draws, 4);
+  EXPECT_EQ(q.scaling.episode_steps, 800);
+  EXPECT_EQ(q.graded.population, 8);
+  // what it leaves out stays at the paper value
+  EXPECT_EQ(q.connectors.weak_stiffness, 5000.0);
+}
+
+TEST(ConfigSchema, KeysHaveTheAgreedNames) {
+  const std::vector<std::string> expected = {"run.seed",
+                                             "run.name",
+                                             "run.stages",
+                                             "run.progress_every_s",
+                                             "agents.population",
+                                             "agents.generations",
+                                             "agents.epochs",
+                                             "agents.episode_steps",
+                                             "agents.gd_rule",
+                                             "agents.gd_step",
+                                             "agents.adam_lr",
+                                             "agents.rest_move_max",
+                                             "agents.rest_length_min",
+                                             "agents.rest_length_max",
+                                             "agents.body_flip_p",
+                                             "agents.spring_flip_p",
+                                             "agents.rest_jitter_sd",
+                                             "agents.uniqueness_k",
+                                             "agents.body_fixed",
+                                             "agents.springs_fixed",
+                                             "agents.rest_moves",
+                                             "connectors.replicates",
+                                             "connectors.iterations",
+                                             "connectors.batch_pairs",
+                                             "connectors.episode_steps",
+                                             "connectors.weak_stiffness",
+                                             "connectors.strong_stiffness",
+                                             "connectors.optimizer",
+                                             "connectors.lr",
+                                             "connectors.clip_norm",
+                                             "connectors.kinds",
+                                             "deploy.episode_steps",
+                                             "deploy.pairs",
+                                             "deploy.environments",
+                                             "deploy.hidden_subsample",
+                                             "specialists.replicates",
+                                             "specialists.iterations",
+                                             "scaling.sizes",
+                                             "scaling.draws",
+                                             "scaling.episode_steps",
+                                             "graded.enabled",
+                                             "graded.population",
+                                             "output.dir",
+                                             "output.checkpoint_every"};
+  EXPECT_EQ(config_keys(), expected);
+}
+
+TEST(ConfigSchema, MarkdownListsEveryKey) {
+  const std::string md = schema_markdown();
+  for (const std::string& key : config_keys()) EXPECT_THAT(md, HasSubstr("| `" + key + "` |")) << key;
+  size_t rows = 0;
+  for (char c : md) rows += c == '\n';
+  EXPECT_EQ(rows, config_keys().size() + 2);  // header and rule
+  EXPECT_THAT(md, HasSubstr("[2, 100000]"));  // agents.population's range
+}
+
+TEST(ConfigSchema, DefaultsAreValidAndAnEmptyFileGivesThem) {
+  EXPECT_NO_THROW(validate(default_config()));
+  expect_same(parse_config("", "empty.toml"), default_config());
+  // a bare struct is not a config
+  EXPECT_THROW(validate(RunConfig{}), InputError);
+}
+
+TEST(ConfigErrors, UnknownKeySuggestsTheNearOne) {
+  const std::string m = refusal("[agents]\npopulaton = 3\n");
+  EXPECT_THAT(m, HasSubstr("unknown key agents.populaton in test.toml"));
+  EXPECT_THAT(m, HasSubstr("did you mean agents.population?"));
+  // a key in the wrong section points to where it lives
+  EXPECT_THAT(refusal("[agents]\nbatch_pairs = 3\n"), HasSubstr("did you mean connectors.batch_pairs?"));
+  // and so does one outside every section
+  EXPECT_THAT(refusal("seed = 3\n"), HasSubstr("did you mean run.seed?"));
+}
+
+TEST(ConfigErrors, UnknownSectionSuggestsTheNearOne) {
+  const std::string m = refusal("[agnets]\npopulation = 3\n");
+  EXPECT_THAT(m, HasSubstr("unknown section [agnets]"));
+  EXPECT_THAT(m, HasSubstr("did you mean [agents]?"));
+}
+
+TEST(ConfigErrors, WrongTypeNamesKeyAndTypes) {
+  EXPECT_THAT(refusal("[agents]\npopulation = \"100\"\n"),
+              HasSubstr("agents.population must be an integer, got a string"));
+  EXPECT_THAT(refusal("[agents]\npopulation = 12.0\n"),
+              HasSubstr("agents.population must be an integer, got a floating-point number"));
+  EXPECT_THAT(refusal("[agents]\nbody_fixed = 1\n"), HasSubstr("agents.body_fixed must be a boolean"));
+  EXPECT_THAT(refusal("[scaling]\nsizes = 5\n"), HasSubstr("scaling.sizes must be a list of integers"));
+  EXPECT_THAT(refusal("[agents]\ngd_step = \"big\"\n"), HasSubstr("agents.gd_step must be a number"));
+  EXPECT_THAT(refusal("agents = 3\n"), HasSubstr("must be a section [agents]"));
+  // an integer is a fine double
+  EXPECT_EQ(parse_config("[agents]\ngd_step = 1\n", "t").agents.gd_step, 1.0);
+}
+
+TEST(ConfigErrors, OutOfRangeNamesKeyAndRange) {
+  EXPECT_THAT(refusal("[agents]\npopulation = 0\n"),
+              HasSubstr("agents.population = 0 is out of range [2, 100000]"));
+  EXPECT_THAT(refusal("[connectors]\nreplicates = -1\n"),
+              HasSubstr("connectors.replicates = -1 is out of range [1, 1000]"));
+  EXPECT_THAT(refusal("[run]\nseed = -5\n"), HasSubstr("run.seed = -5 is out of range"));
+  EXPECT_THAT(refusal("[agents]\nepisode_steps = 0\n"),
+              HasSubstr("agents.episode_steps = 0 is out of range"));
+  EXPECT_THAT(refusal("[deploy]\nepisode_steps = 0\n"),
+              HasSubstr("deploy.episode_steps = 0 is out of range"));
+  // open lower bound, closed upper bound, NaN
+  EXPECT_THAT(refusal("[agents]\ngd_step = 0.0\n"),
+              HasSubstr("agents.gd_step = 0.0 is out of range (0, 10]"));
+  EXPECT_NO_THROW(parse_config("[agents]\ngd_step = 10.0\n", "t"));
+  EXPECT_THAT(refusal("[agents]\nbody_flip_p = 1.5\n"),
+              HasSubstr("agents.body_flip_p = 1.5 is out of range [0, 1]"));
+  EXPECT_THAT(refusal("[connectors]\nlr = nan\n"), HasSubstr("connectors.lr = nan is out of range"));
+  // larger than an int holds
+  EXPECT_THAT(refusal("[agents]\nepochs = 9999999999999\n"),
+              HasSubstr("agents.epochs = 9999999999999 is out of"));
+  // the message says where
+  EXPECT_THAT(refusal("[agents]\n\npopulation = 0\n"), HasSubstr("test.toml, line 3"));
+}
+
+TEST(ConfigErrors, ListElementsChecked) {
+  EXPECT_THAT(refusal("[scaling]\nsizes = [5, 1]\n"),
+              HasSubstr("scaling.sizes[1] = 1 is out of range [2, 1000]"));
+  EXPECT_THAT(refusal("[scaling]\nsizes = []\n"), HasSubstr("scaling.sizes must list at least one value"));
+  EXPECT_THAT(refusal("[scaling]\nsizes = [5, 5]\n"), HasSubstr("scaling.sizes lists 5 twice"));
+  const std::string env = refusal("[deploy]\nenvironments = [\"flat\", \"moon\"]\n");
+  EXPECT_THAT(env, HasSubstr("deploy.environments[1] = \"moon\" is not one of"));
+  EXPECT_THAT(env, HasSubstr("treadmill"));  // the known names are listed
+  EXPECT_THAT(refusal("[deploy]\nenvironments = [\"ice\"]\n"),
+              HasSubstr("deploy.environments must list flat"));
+  EXPECT_THAT(refusal("[run]\nstages = [\"agents\", \"agents\"]\n"),
+              HasSubstr("run.stages lists \"agents\" twice"));
+  EXPECT_THAT(refusal("[connectors]\nkinds = [\"weak_uniform\", 3]\n"),
+              HasSubstr("connectors.kinds[1] must be a string, got an integer"));
+  EXPECT_THAT(refusal("[agents]\ngd_rule = \"keepbest\"\n"), HasSubstr("did you mean keep_best?"));
+}
+
+TEST(ConfigErrors, ImpossibleCombinationsNameBothKeys) {
+  // a uniform batch pairs agent i with its clone, i < batch_pairs
+  const std::string batch =
+      refusal("[agents]\npopulation = 10\n[connectors]\nbatch_pairs = 20\n[deploy]\npairs = 10\n");
+  EXPECT_THAT(batch, HasSubstr("connectors.batch_pairs = 20"));
+  EXPECT_THAT(batch, HasSubstr("agents.population = 10"));
+  // fine with diverse kinds only, or without the connectors stage
+  EXPECT_NO_THROW(
+      parse_config("[agents]\npopulation = 10\n[connectors]\nbatch_pairs = 20\nkinds = "
+                   "[\"weak_diverse\"]\n[deploy]\npairs = 10\n"
+                   "[run]\nstages = [\"agents\", \"connectors\", \"deploy\"]\n",
+                   "t"));
+  const std::string pairs =
+      refusal("[agents]\npopulation = 10\n[connectors]\nbatch_pairs = 10\n[deploy]\npairs = 11\n");
+  EXPECT_THAT(pairs, HasSubstr("deploy.pairs = 11"));
+  EXPECT_THAT(pairs, HasSubstr("agents.population = 10"));
+  // uniqueness needs k other agents, in the graded populations too
+  const std::string k = refusal("[agents]\nuniqueness_k = 100\n");
+  EXPECT_THAT(k, HasSubstr("agents.uniqueness_k = 100"));
+  EXPECT_THAT(k, HasSubstr("agents.population = 100"));
+  EXPECT_THAT(refusal("[graded]\npopulation = 5\n"), HasSubstr("graded.population = 5"));
+  EXPECT_NO_THROW(parse_config("[graded]\npopulation = 5\nenabled = false\n", "t"));
+  // chains of N distinct agents
+  const std::string chain =
+      refusal("[agents]\npopulation = 10\n[connectors]\nbatch_pairs = 10\n[deploy]\npairs = 10\n");
+  EXPECT_THAT(chain, HasSubstr("scaling.sizes has 20"));
+  EXPECT_THAT(chain, HasSubstr("agents.population = 10"));
+  EXPECT_THAT(refusal("[connectors]\nkinds = [\"weak_uniform\", \"strong_diverse\"]\n"),
+              HasSubstr("connectors.kinds lacks weak_diverse"));
+  // weak is weaker than strong
+  const std::string stiff = refusal("[connectors]\nweak_stiffness = 4e4\n");
+  EXPECT_THAT(stiff, HasSubstr("connectors.weak_stiffness = 40000.0"));
+  EXPECT_THAT(stiff, HasSubstr("connectors.strong_stiffness = 30000.0"));
+  // rest lengths need room to move
+  const std::string rest = refusal("[agents]\nrest_length_min = 1.0\nrest_length_max = 1.0\n");
+  EXPECT_THAT(rest, HasSubstr("agents.rest_length_min"));
+  EXPECT_THAT(rest, HasSubstr("agents.rest_length_max"));
+  // a fixed body keeps its shape
+  EXPECT_THAT(refusal("[agents]\nbody_fixed = true\n"), HasSubstr("agents.body_flip_p"));
+  EXPECT_THAT(refusal("[agents]\nbody_fixed = true\nbody_flip_p = 0.0\n"), HasSubstr("agents.rest_moves"));
+  EXPECT_THAT(refusal("[agents]\nbody_fixed = true\nbody_flip_p = 0.0\nrest_moves = false\n"),
+              HasSubstr("agents.rest_jitter_sd"));
+  EXPECT_NO_THROW(
+      parse_config("[agents]\nbody_fixed = true\nbody_flip_p = 0.0\nrest_moves = false\n"
+                   "rest_jitter_sd = 0.0\n",
+                   "t"));
+  EXPECT_THAT(refusal("[agents]\nsprings_fixed = true\n"), HasSubstr("agents.spring_flip_p"));
+  EXPECT_THAT(
+      refusal("[agents]\nbody_fixed = true\nbody_flip_p = 0.0\nrest_moves = false\nrest_jitter_sd = 0.0\n"
+              "springs_fixed = true\nspring_flip_p = 0.0\n"),
+      HasSubstr("agents.generations"));
+  // specialists and scaling run in novel environments
+  EXPECT_THAT(refusal("[deploy]\nenvironments = [\"flat\"]\n"), HasSubstr("run.stages has specialists"));
+}
+
+TEST(ConfigErrors, MalformedTomlNamesTheFile) {
+  EXPECT_THAT(refusal("[agents\npopulation = 3\n"), HasSubstr("test.toml"));
+  EXPECT_THAT(
+      [] {
+        try {
+          load_config("/nonexistent/x.toml");
+        } catch (const InputError& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      }(),
+      HasSubstr("cannot read config file /nonexistent/x.toml"));
+}
+
+TEST(ConfigOverrides, ApplyWithTheSameChecks) {
+  const RunConfig c = parse_config(
+      "[agents]\npopulation = 50\n", "t",
+      {"agents.population=12", "run.name=demo", "deploy.environments=flat, ice", "scaling.sizes=3,5",
+       "agents.gd_rule=adam", "run.seed = 7", "agents.gd_step=0.5",
+       "connectors.kinds=[\"weak_uniform\", \"weak_diverse\"]", "run.name=\"quoted\"",
+       "connectors.batch_pairs=8", "deploy.pairs=8", "agents.rest_moves=false", "output.dir=out/runs"});
+  EXPECT_EQ(c.agents.population, 12);  // the override wins over the file
+  EXPECT_EQ(c.run.name, "quoted");     // the later override wins
+  EXPECT_EQ(c.deploy.environments, (std::vector<std::string>{"flat", "ice"}));
+  EXPECT_EQ(c.scaling.sizes, (std::vector<int>{3, 5}));
+  EXPECT_EQ(c.agents.gd_rule, "adam");
+  EXPECT_EQ(c.run.seed, 7u);
+  EXPECT_EQ(c.agents.gd_step, 0.5);
+  EXPECT_EQ(c.connectors.kinds.size(), 2u);
+  EXPECT_FALSE(c.agents.rest_moves);
+  EXPECT_EQ(c.output.dir, "out/runs");
+  EXPECT_EQ(apply_overrides(default_config(), {"scaling.sizes=7"}).scaling.sizes, std::vector<int>{7});
+
+  const std::string range = refusal("", {"agents.population=0"});
+  EXPECT_THAT(range, HasSubstr("agents.population = 0 is out of range [2, 100000]"));
+  EXPECT_THAT(range, HasSubstr("command-line override"));
+  const std::string unknown = refusal("", {"agents.populaton=3"});
+  EXPECT_THAT(unknown, HasSubstr("unknown key agents.populaton"));
+  EXPECT_THAT(unknown, HasSubstr("did you mean agents.population?"));
+  EXPECT_THAT(refusal("", {"agents.population=abc"}),
+              HasSubstr("agents.population must be an integer, got abc"));
+  EXPECT_THAT(refusal("", {"agents.population=\"12\""}),
+              HasSubstr("agents.population must be an integer, got a string"));
+  EXPECT_THAT(refusal("", {"agents.population=12\nagents.epochs=3"}), HasSubstr("agents.population must be"));
+  EXPECT_THAT(refusal("", {"population=3"}), HasSubstr("must look like section.key=value"));
+  EXPECT_THAT(refusal("", {"agents.population"}), HasSubstr("must look like section.key=value"));
+  EXPECT_THAT(refusal("", {"deploy.environments=flat,moon"}), HasSubstr("\"moon\" is not one of"));
+  EXPECT_THAT(refusal("", {"scaling.sizes=1"}), HasSubstr("scaling.sizes[0] = 1 is out of range"));
+  // and the cross-key checks
+  const std::string batch = refusal("", {"agents.population=20", "deploy.pairs=20", "scaling.sizes=5"});
+  EXPECT_THAT(batch, HasSubstr("connectors.batch_pairs = 100"));
+  EXPECT_THAT(batch, HasSubstr("agents.population = 20"));
+}
+
+TEST(ConfigRoundTrip, ToTomlParsesBackEqual) {
+  std::vector<RunConfig> configs = {default_config(), load_config(preset("quick.toml")),
+                                    load_config(preset("tiny.toml"))};
+  configs.push_back(apply_overrides(
+      default_config(),
+      {"run.name=a-b_c.d", "agents.gd_step=0.1", "agents.rest_jitter_sd=1e-7", "run.seed=9223372036854775807",
+       "connectors.weak_stiffness=1234.5678901234567", "run.progress_every_s=0.1"}));
+  for (const RunConfig& c : configs) {
+    const std::string text = to_toml(c);
+    expect_same(parse_config(text, "resolved.toml"), c);
+    // every key is written, each with a comment above it
+    for (const auto& [key, value] : flat(c)) {
+      const std::string name = key.substr(key.find('.') + 1);
+      EXPECT_THAT(text, HasSubstr("\n" + name + " = ")) << key;
+    }
+    EXPECT_THAT(text, HasSubstr("# size of the evolved population"));
+  }
+  EXPECT_EQ(configs.back().agents.rest_jitter_sd, 1e-7);
+  EXPECT_EQ(configs.back().connectors.weak_stiffness, 1234.5678901234567);
+}
+
+TEST(ConfigRoundTrip, FlatPairsAreOverrides) {
+  const RunConfig c = load_config(preset("quick.toml"));
+  const auto pairs = flat(c);
+  EXPECT_EQ(pairs.size(), config_keys().size());
+  std::vector<std::string> overrides;
+  for (const auto& [key, value] : pairs) {
+    EXPECT_THAT(value, Not(HasSubstr("\n"))) << key;
+    overrides.push_back(key + "=" + value);
+  }
+  expect_same(apply_overrides(default_config(), overrides), c);
+  // strings bare, numbers as in TOML
+  const auto find = [&](const std::string& k) {
+    for (const auto& [key, value] : pairs)
+      if (key == k) return value;
+    return std::string("?");
+  };
+  EXPECT_EQ(find("agents.population"), "12");
+  EXPECT_EQ(find("run.name"), "quick");
+  EXPECT_EQ(find("agents.gd_step"), "0.16");
+  EXPECT_EQ(find("scaling.sizes"), "[3, 5]");
+  EXPECT_EQ(find("graded.enabled"), "true");
+}
+
+TEST(ConfigStages, EnabledFollowsListAndGradedSwitch) {
+  RunConfig c = default_config();
+  EXPECT_TRUE(stage_enabled(c, "graded"));
+  c.graded.enabled = false;
+  EXPECT_FALSE(stage_enabled(c, "graded"));
+  c = parse_config("[run]\nstages = [\"agents\"]\n", "t");
+  EXPECT_TRUE(stage_enabled(c, "agents"));
+  EXPECT_FALSE(stage_enabled(c, "deploy"));
+}
+
+}  // namespace
+}  // namespace divcoll::io
