@@ -5,6 +5,7 @@
 
 #include "cli/commands.hpp"
 #include "common/check.hpp"
+#include "mpi/run_cmd.hpp"
 
 int main(int argc, char** argv) {
   using namespace divcoll;
@@ -52,6 +53,19 @@ int main(int argc, char** argv) {
   g->add_option("--steps", gdc.steps, "steps per episode")->check(CLI::Range(1, 10000000));
   g->add_option("--seed", gdc.seed, "seed");
 
+  mpi::RunArgs evo;
+  auto* v = app.add_subcommand("evolve", "the agents stage: evolution and gradient descent (MPI)");
+  mpi::RunArgs run;
+  auto* r = app.add_subcommand("run", "the whole pipeline, stage by stage (MPI)");
+  for (auto [cmd, a] : {std::pair{v, &evo}, std::pair{r, &run}}) {
+    cmd->add_option("config", a->config, "config file (TOML), e.g. configs/quick.toml")->required()->check(CLI::ExistingFile);
+    cmd->add_option("overrides", a->overrides, "section.key=value overrides");
+    cmd->add_option("--out", a->out, "run file (default: <output.dir>/<run.name>.h5)");
+    cmd->add_flag("--resume", a->resume, "continue the run file if it exists (else start it)");
+    cmd->add_flag("--force", a->force, "overwrite an existing run file");
+  }
+  evo.agents_only = true;
+
   // a mistyped command is named, with the list of commands
   std::string known;
   bool found = false;
@@ -63,6 +77,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "divcoll: error: unknown command '%s' (commands: %s)\n", argv[1], known.c_str());
     return 2;
   }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
@@ -76,6 +91,8 @@ int main(int argc, char** argv) {
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*g) return cli::gd_compare(gdc);
+    if (*v) return mpi::run_main(argc, argv, evo);
+    if (*r) return mpi::run_main(argc, argv, run);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());
     return 2;

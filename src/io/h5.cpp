@@ -332,6 +332,52 @@ void Node::write(const std::string& path, const std::vector<T>& data, const Dims
   if (!d.reset()) fail(w, "cannot close the dataset");
 }
 
+template <class T>
+void Node::write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows,
+                      const std::vector<T>& packed) const {
+  const std::string w = where(path);
+  if (dims.empty()) throw InputError(w + ": write_rows needs at least one dimension");
+  const hsize_t row_size = product(dims) / std::max<hsize_t>(dims[0], 1);
+  if (packed.size() != rows.size() * row_size)
+    throw InputError(w + ": " + std::to_string(packed.size()) + " values do not fill " +
+                     std::to_string(rows.size()) + " rows of " + dims_string(dims));
+  Handle fspace(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  if (!fspace.valid()) fail(w, "cannot make a dataspace of dims " + dims_string(dims));
+  Handle lcpl = intermediate_lcpl(w);
+  // creation is collective: every rank of the file's communicator calls this
+  Handle d(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
+           H5Dclose);
+  if (!d.valid()) fail(w, "cannot create the dataset");
+  // this rank's rows, as a union of one-row hyperslabs (or none)
+  Dims start(dims.size(), 0), count = dims;
+  count[0] = 1;
+  if (rows.empty()) {
+    H5Sselect_none(fspace.id());
+  } else {
+    for (size_t q = 0; q < rows.size(); ++q) {
+      if (rows[q] < 0 || static_cast<hsize_t>(rows[q]) >= dims[0]) throw InputError(w + ": row out of range");
+      start[0] = static_cast<hsize_t>(rows[q]);
+      if (H5Sselect_hyperslab(fspace.id(), q == 0 ? H5S_SELECT_SET : H5S_SELECT_OR, start.data(), nullptr,
+                              count.data(), nullptr) < 0)
+        fail(w, "cannot select rows");
+    }
+  }
+  const hsize_t n_mem = std::max<hsize_t>(packed.size(), 1);
+  Handle mspace(H5Screate_simple(1, &n_mem, nullptr), H5Sclose);
+  if (rows.empty()) H5Sselect_none(mspace.id());
+  // a collective transfer when the file is open with MPI-IO, independent otherwise
+  Handle dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
+  hid_t fapl = H5Fget_access_plist(id());
+  const bool mpio = H5Pget_driver(fapl) == H5FD_MPIO;
+  H5Pclose(fapl);
+  if (mpio) H5Pset_dxpl_mpio(dxpl.id(), H5FD_MPIO_COLLECTIVE);
+  const T dummy{};
+  if (H5Dwrite(d.id(), Element<T>::mem(), mspace.id(), fspace.id(), dxpl.id(), packed.empty() ? &dummy : packed.data()) <
+      0)
+    fail(w, "cannot write the dataset");
+  if (!d.reset()) fail(w, "cannot close the dataset");
+}
+
 Dims Node::dims(const std::string& path) const {
   const std::string w = where(path);
   if (!has(path)) throw InputError(file_ + ": missing dataset " + path_of(path));
@@ -394,6 +440,8 @@ std::vector<T> Node::read(const std::string& path, const Dims& expected) const {
 
 #define DIVCOLL_H5_INSTANTIATE(T)                                                             \
   template void Node::write<T>(const std::string&, const std::vector<T>&, const Dims&) const; \
+  template void Node::write_rows<T>(const std::string&, const Dims&, const std::vector<int64_t>&,        \
+                                    const std::vector<T>&) const;                                      \
   template std::vector<T> Node::read<T>(const std::string&, Dims*) const;                     \
   template std::vector<T> Node::read<T>(const std::string&, const Dims&) const;
 DIVCOLL_H5_INSTANTIATE(double)

@@ -89,6 +89,12 @@ class Node {
   // data.size() must be the product of dims; an existing dataset of that name is an error.
   template <class T>
   void write(const std::string& path, const std::vector<T>& data, const Dims& dims) const;
+  // creates dataset `path` of `dims` and writes the rows (first index) listed in `rows` from `packed`
+  // (those rows one after the other). With an MPI-IO file every rank calls it (creation is collective),
+  // each with the rows it holds, possibly none, and the transfer is collective.
+  template <class T>
+  void write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows,
+                  const std::vector<T>& packed) const;
   // dims of a dataset; InputError naming it if it is missing or not a dataset
   Dims dims(const std::string& path) const;
   // the whole dataset converted to T (a float dataset is refused for integer T)

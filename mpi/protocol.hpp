@@ -1,0 +1,72 @@
+// the master/worker protocol: message tags and the Boost.Serialization of every payload.
+//
+//   worker → master   kReady                 (empty)       "give me an item"
+//   master → worker   kTask     [index | serialized task]  an item to compute
+//   worker → master   kResult   [index | serialized result] the answer, and a request for the next item
+//   master → worker   kRoundEnd                (empty)       no more items in this round
+//
+// A round is collective: every rank enters farm() (mpi/scheduler.hpp) with the same item count; it ends
+// when every item has a result on the master and every worker has been told kRoundEnd. Payloads are
+// binary archives of plain data (collective::Agent, evo::TrainResult, ...) defined below.
+#pragma once
+
+#include <boost/archive/binary_iarchive.hpp>
+#include <boost/archive/binary_oarchive.hpp>
+#include <boost/serialization/array.hpp>
+#include <boost/serialization/string.hpp>
+#include <boost/serialization/vector.hpp>
+#include <sstream>
+#include <string>
+
+#include "collective/builders.hpp"
+#include "evo/evolution.hpp"
+#include "evo/gd.hpp"
+
+namespace divcoll::mpi {
+
+enum Tag : int { kReady = 1, kTask = 2, kResult = 3, kRoundEnd = 4 };
+
+template <class T>
+std::string pack(const T& v) {
+  std::ostringstream os(std::ios::binary);
+  {
+    boost::archive::binary_oarchive ar(os, boost::archive::no_header);
+    ar << v;
+  }
+  return os.str();
+}
+
+template <class T>
+T unpack(const std::string& bytes) {
+  std::istringstream is(bytes, std::ios::binary);
+  boost::archive::binary_iarchive ar(is, boost::archive::no_header);
+  T v;
+  ar >> v;
+  return v;
+}
+
+}  // namespace divcoll::mpi
+
+namespace boost::serialization {
+
+template <class Ar>
+void serialize(Ar& ar, divcoll::collective::Anchors& a, unsigned) {
+  ar & a.back_foot & a.front_foot & a.back_upper & a.front_upper;
+}
+
+template <class Ar>
+void serialize(Ar& ar, divcoll::collective::Agent& a, unsigned) {
+  ar & a.cells & a.springs & a.rest_pos & a.spring_i & a.spring_j & a.rest_length & a.amplitude & a.params & a.anchors;
+}
+
+template <class Ar>
+void serialize(Ar& ar, divcoll::evo::TrainResult& r, unsigned) {
+  ar & r.travel_u & r.fitness_bl & r.status & r.curve_u;
+}
+
+template <class Ar>
+void serialize(Ar& ar, divcoll::evo::Individual& x, unsigned) {
+  ar & x.agent & x.id & x.parent & x.train & x.descriptor;
+}
+
+}  // namespace boost::serialization

@@ -1,0 +1,118 @@
+#include "mpi/run_cmd.hpp"
+
+#include <mpi.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+
+#include "common/check.hpp"
+#include "io/config.hpp"
+#include "io/h5.hpp"
+#include "mpi/agents_stage.hpp"
+
+namespace divcoll::mpi {
+namespace {
+
+std::string now_iso() {
+  const std::time_t t = std::time(nullptr);
+  char b[64];
+  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return b;
+}
+
+// MPI for the lifetime of a command (work happens in an inner scope, so files close before Finalize)
+struct MpiSession {
+  MpiSession(int argc, char** argv) { MPI_Init(&argc, &argv); }
+  ~MpiSession() { MPI_Finalize(); }
+};
+
+}  // namespace
+
+int run_main(int argc, char** argv, const RunArgs& args) {
+  MpiSession session(argc, argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  namespace fs = std::filesystem;
+
+  // everything that can be refused is refused here, identically on every rank, before any work
+  io::RunConfig cfg;
+  std::string path;
+  try {
+    cfg = io::load_config(args.config, args.overrides);
+    path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
+    DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
+    if (fs::exists(path) && !args.resume && !args.force)
+      throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
+    const fs::path parent = fs::absolute(path).parent_path();
+    if (rank == 0) fs::create_directories(parent);
+    MPI_Barrier(MPI_COMM_WORLD);
+    DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
+    DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+  } catch (const InputError& e) {
+    if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
+    return 2;
+  }
+
+  try {
+    const bool existing = args.resume && fs::exists(path);
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    io::h5::File file = existing ? io::h5::File::open(path, true, fapl.id())
+                                 : io::h5::File::create(path, args.force, fapl.id());
+    const std::string toml = io::to_toml(cfg);
+    if (existing) {
+      DIVCOLL_THROW_UNLESS(file.has_attribute("format") && file.read_string("format") == "divcoll-run",
+                           path << " is not a divcoll run file");
+      // a run resumes only with the config it started with
+      const io::RunConfig before = io::parse_config(file.read_string("config"), path + " (stored config)");
+      if (!(before == cfg)) {
+        std::string diff;
+        const auto a = io::flat(before), b = io::flat(cfg);
+        for (size_t i = 0; i < a.size(); ++i)
+          if (a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " → " + b[i].second + ")";
+        throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+      }
+      file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
+    } else {
+      file.write_string("format", "divcoll-run");
+      file.write_int("version", 1);
+      file.write_string("divcoll_version", DIVCOLL_VERSION);
+      file.write_string("git_commit", DIVCOLL_GIT_COMMIT);
+      file.write_int("seed", static_cast<int64_t>(cfg.run.seed));
+      file.write_string("config", toml);
+      file.write_string("start_time", now_iso());
+      char host[256] = {0};
+      gethostname(host, sizeof host - 1);
+      file.write_string("hostname", host);
+    }
+    file.write_int("ranks", size);
+    if (rank == 0)
+      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, DIVCOLL_GIT_COMMIT,
+                  args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
+                  path.c_str());
+
+    const auto t0 = std::chrono::steady_clock::now();
+    if (io::stage_enabled(cfg, "agents") || args.agents_only) {
+      run_agents_stage(MPI_COMM_WORLD, cfg, file);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      file.group("agents").write_double("wall_s_last_session", wall);
+    }
+    file.write_string("end_time", now_iso());
+    file.close();
+    if (rank == 0) std::printf("done: %s\n", path.c_str());
+  } catch (const InputError& e) {
+    // a failure after work started may be on one rank only: stop every rank, keep what was written
+    std::fprintf(stderr, "divcoll: error (rank %d): %s\n", rank, e.what());
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "divcoll: failed (rank %d): %s\n", rank, e.what());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  return 0;
+}
+
+}  // namespace divcoll::mpi

@@ -1,0 +1,23 @@
+// `divcoll evolve` and `divcoll run`: the MPI entry of the pipeline. Every rank runs this; rank 0 is the
+// master and the only printer. The run file is created (or, with --resume, reopened) by all ranks with
+// MPI-IO and holds the resolved config and provenance as root attributes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace divcoll::mpi {
+
+struct RunArgs {
+  std::string config;                  // TOML file
+  std::vector<std::string> overrides;  // "section.key=value"
+  std::string out;                     // run file; default <output.dir>/<run.name>.h5
+  bool resume = false;                 // continue the run file if it exists (else start it)
+  bool force = false;                  // overwrite an existing run file
+  bool agents_only = false;            // `evolve`: only the agents stage
+};
+
+// initialises MPI, runs, finalises; returns the exit code (2: bad input, 1: failure)
+int run_main(int argc, char** argv, const RunArgs& args);
+
+}  // namespace divcoll::mpi

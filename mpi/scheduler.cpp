@@ -1,0 +1,96 @@
+#include "mpi/scheduler.hpp"
+
+#include <cstring>
+
+#include "mpi/protocol.hpp"
+
+namespace divcoll::mpi {
+namespace {
+
+void send_bytes(MPI_Comm comm, int dest, int tag, int64_t index, const std::string& bytes) {
+  std::string buf(sizeof(int64_t) + bytes.size(), '\0');
+  std::memcpy(buf.data(), &index, sizeof index);
+  std::memcpy(buf.data() + sizeof index, bytes.data(), bytes.size());
+  MPI_Send(buf.data(), static_cast<int>(buf.size()), MPI_BYTE, dest, tag, comm);
+}
+
+// receives a message already probed: (index, payload)
+std::pair<int64_t, std::string> recv_bytes(MPI_Comm comm, const MPI_Status& st) {
+  int count = 0;
+  MPI_Get_count(&st, MPI_BYTE, &count);
+  std::string buf(count, '\0');
+  MPI_Recv(buf.data(), count, MPI_BYTE, st.MPI_SOURCE, st.MPI_TAG, comm, MPI_STATUS_IGNORE);
+  int64_t index = -1;
+  if (count >= static_cast<int>(sizeof index)) std::memcpy(&index, buf.data(), sizeof index);
+  return {index, count >= static_cast<int>(sizeof index) ? buf.substr(sizeof index) : std::string()};
+}
+
+}  // namespace
+
+FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
+                const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  int64_t n = static_cast<int64_t>(items.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
+  FarmResult out;
+  out.results.assign(n, std::string());
+  out.owner.assign(n, 0);
+
+  if (rank == 0) {
+    int64_t next = 0, done = 0;
+    int workers_open = size - 1;
+    auto hand_out = [&](int worker) {
+      if (next < n) {
+        out.owner[next] = worker;
+        send_bytes(comm, worker, kTask, next, items[next]);
+        ++next;
+      } else {
+        send_bytes(comm, worker, kRoundEnd, -1, std::string());
+        --workers_open;
+      }
+    };
+    auto handle = [&](const MPI_Status& st) {
+      auto [index, payload] = recv_bytes(comm, st);
+      if (st.MPI_TAG == kResult) {
+        out.results[index] = std::move(payload);
+        ++done;
+        if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
+      }
+      hand_out(st.MPI_SOURCE);
+    };
+    while (done < n || workers_open > 0) {
+      MPI_Status st;
+      int flag = 0;
+      MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &flag, &st);
+      if (flag) {
+        handle(st);
+      } else if (next < n && (opt.master_works || size == 1)) {
+        // the master computes an item itself
+        const int64_t i = next++;
+        out.owner[i] = 0;
+        out.results[i] = compute(items[i]);
+        ++done;
+        if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
+      } else {
+        MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &st);
+        handle(st);
+      }
+    }
+  } else {
+    send_bytes(comm, 0, kReady, -1, std::string());
+    for (;;) {
+      MPI_Status st;
+      MPI_Probe(0, MPI_ANY_TAG, comm, &st);
+      auto [index, payload] = recv_bytes(comm, st);
+      if (st.MPI_TAG == kRoundEnd) break;
+      out.results[index] = compute(payload);
+      send_bytes(comm, 0, kResult, index, out.results[index]);
+    }
+  }
+  MPI_Bcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm);
+  return out;
+}
+
+}  // namespace divcoll::mpi
