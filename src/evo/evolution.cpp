@@ -1,0 +1,78 @@
+#include "evo/evolution.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "morph/body.hpp"
+
+namespace divcoll::evo {
+
+morph::Descriptor agent_descriptor(const collective::Agent& a) {
+  morph::AgentGeometry g;
+  g.rest_pos = a.rest_pos;
+  g.spring_i = a.spring_i;
+  g.spring_j = a.spring_j;
+  g.rest_length = a.rest_length;
+  g.amplitude = a.amplitude;
+  g.cell = morph::agent_geometry(a.cells, a.springs).cell;
+  return morph::descriptor(g);
+}
+
+collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,
+                                 const GdOptions& gd) {
+  collective::Agent child = parent;
+  // genotype: body bits (repaired to a valid body), then spring bits
+  if (!opt.body_fixed) child.cells = morph::mutate_body(parent.cells, rng, opt.body_flip_p);
+  if (!opt.springs_fixed) child.springs = morph::mutate_springs(parent.springs, rng, opt.spring_flip_p);
+  const morph::AgentGeometry g = morph::agent_geometry(child.cells, child.springs);
+  child.spring_i = g.spring_i;
+  child.spring_j = g.spring_j;
+  child.amplitude = g.amplitude;
+  if (child.cells != parent.cells) {
+    child.rest_pos = g.rest_pos;  // a new body starts from its lattice points
+  }
+  collective::update_rest_lengths(child);
+  // rest positions: N(0, sd²) per coordinate, kept only if every rest length stays within its bounds
+  if (opt.rest_moves && opt.rest_jitter_sd > 0) {
+    std::vector<double> delta(child.rest_pos.size());
+    for (double& d : delta) d = normal(rng, 0.0, opt.rest_jitter_sd);
+    move_rest_positions(child, delta, gd);
+  }
+  return child;
+}
+
+std::vector<int> select_survivors(const std::vector<Individual>& pool, int keep, int k,
+                                  std::vector<double>* uniqueness_out) {
+  const int n = static_cast<int>(pool.size());
+  std::vector<int> alive(n);
+  for (int i = 0; i < n; ++i) alive[i] = i;
+  auto uniq_of = [&](const std::vector<int>& members) {
+    std::vector<morph::Descriptor> d;
+    for (int i : members) d.push_back(pool[i].descriptor);
+    return morph::uniqueness(d, k);
+  };
+  if (uniqueness_out) *uniqueness_out = uniq_of(alive);
+  auto failed = [&](int i) {
+    return pool[i].train.status != sim::Status::ok || !std::isfinite(pool[i].train.fitness_bl);
+  };
+  while (static_cast<int>(alive.size()) > keep) {
+    // failed members go first, the lowest index first
+    int victim = -1;
+    for (int q = 0; q < static_cast<int>(alive.size()) && victim < 0; ++q)
+      if (failed(alive[q])) victim = q;
+    if (victim < 0) {
+      const std::vector<double> u = uniq_of(alive);
+      double fmin = std::numeric_limits<double>::infinity();
+      for (int i : alive) fmin = std::min(fmin, pool[i].train.fitness_bl);
+      double worst = std::numeric_limits<double>::infinity();
+      for (int q = 0; q < static_cast<int>(alive.size()); ++q) {
+        const double score = (pool[alive[q]].train.fitness_bl - fmin + 1e-6) * u[q];
+        if (score < worst) worst = score, victim = q;  // ties: the lowest index
+      }
+    }
+    alive.erase(alive.begin() + victim);
+  }
+  return alive;
+}
+
+}  // namespace divcoll::evo

@@ -1,0 +1,48 @@
+// the evolutionary algorithm of SPEC §4.4: offspring by mutation, deletion by fitness × uniqueness.
+// Every random draw of offspring i in generation g comes from make_rng(run seed, stage, i), so the
+// result does not depend on who computes it or in which order.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "evo/gd.hpp"
+#include "morph/descriptor.hpp"
+
+namespace divcoll::evo {
+
+struct MutationOptions {
+  double body_flip_p = 1.0 / 28;
+  double spring_flip_p = 1.0 / 21;
+  double rest_jitter_sd = 0.005;  // u
+  bool body_fixed = false;        // graded diversity: the body genotype never mutates
+  bool springs_fixed = false;     // graded diversity: the spring genotype never mutates
+  bool rest_moves = true;         // rest positions are jittered (and trained)
+};
+
+// one member of a generation's pool
+struct Individual {
+  collective::Agent agent;
+  int64_t id = -1;
+  int64_t parent = -1;
+  TrainResult train;
+  morph::Descriptor descriptor{};
+};
+
+// the behaviour descriptor of an agent's body (SPEC §4.2)
+morph::Descriptor agent_descriptor(const collective::Agent& a);
+
+// a copy of `parent` (weights and rest positions included) with its body bits flipped and repaired, its
+// spring bits flipped, and its rest positions jittered; a changed body starts from its lattice positions
+collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,
+                                 const GdOptions& gd);
+
+// SPEC §4.4 deletion: among the pool, repeatedly delete the member with the lowest
+// (fitness − min fitness + 1e-6) × uniqueness (uniqueness recomputed over the remaining pool after each
+// deletion; members whose training failed are deleted first) until `keep` remain. Returns the indices
+// kept, in pool order; `uniqueness_out` (if given) receives each member's uniqueness in the full pool.
+std::vector<int> select_survivors(const std::vector<Individual>& pool, int keep, int k,
+                                  std::vector<double>* uniqueness_out = nullptr);
+
+}  // namespace divcoll::evo
