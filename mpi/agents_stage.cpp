@@ -167,7 +167,8 @@ std::vector<evo::Individual> read_final_population(const io::h5::Node& file) {
   return read_pool(file, "agents/final", nullptr);
 }
 
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file) {
+void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -217,7 +218,10 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
                          file.file() << ": generation " << done - 1 << " has " << population.size()
                                      << " survivors, not agents.population = " << P
                                      << " (was the run started with another config?)");
-    std::printf("agents: resuming after generation %lld\n", static_cast<long long>(done - 1));
+    if (done > A.generations)
+      std::printf("agents: all generations were already done; checking the final population\n");
+    else
+      std::printf("agents: resuming after generation %lld\n", static_cast<long long>(done - 1));
   }
 
   // the work item: train one agent (created or mutated on the master)
@@ -284,7 +288,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     }
     write_pool(comm, file, gen_name(g), rows, owner, rank, A.epochs);
     stage.write_int("generations_done", g + 1);
-    H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
+    if ((g + 1) % cfg.output.checkpoint_every == 0) checkpoint();
 
     if (rank == 0) {
       const Summary s = summarize(population);
@@ -321,7 +325,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   }
   stage.write_int("generations_done", A.generations + 1);
   stage.write_string("status", "complete");
-  H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
+  checkpoint();
 }
 
 }  // namespace divcoll::mpi

@@ -18,6 +18,7 @@
 
 #include <mpi.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,8 +31,10 @@ namespace divcoll::mpi {
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
 inline constexpr uint64_t kAgentsStage = 1000;
 
-// runs (or resumes) the stage on `comm`; rank 0 prints progress. Every rank calls it.
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file);
+// runs (or resumes) the stage on `comm`; rank 0 prints progress. Every rank calls it. `checkpoint` is
+// called (collectively) after every output.checkpoint_every generations and at the end of the stage.
+void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint);
 
 // the final population of a run file's agents stage (rank-local read)
 std::vector<evo::Individual> read_final_population(const io::h5::Node& file);

@@ -46,6 +46,11 @@ int main(int argc, char** argv) {
 
   auto* e = app.add_subcommand("envs", "list the built-in environments");
 
+  std::string cmp_a, cmp_b;
+  auto* cmpc = app.add_subcommand("compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)");
+  cmpc->add_option("a", cmp_a, "first file")->required()->check(CLI::ExistingFile);
+  cmpc->add_option("b", cmp_b, "second file")->required()->check(CLI::ExistingFile);
+
   cli::GdCompareArgs gdc;
   auto* g = app.add_subcommand("gd-compare", "measure the gradient rules of SPEC §4.4 on the same random agents");
   g->add_option("--agents", gdc.agents, "random agents")->check(CLI::Range(2, 100000));
@@ -91,6 +96,7 @@ int main(int argc, char** argv) {
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*g) return cli::gd_compare(gdc);
+    if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*v) return mpi::run_main(argc, argv, evo);
     if (*r) return mpi::run_main(argc, argv, run);
   } catch (const InputError& err) {

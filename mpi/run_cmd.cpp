@@ -12,6 +12,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "mpi/agents_stage.hpp"
+#include "mpi/checkpoint.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -58,12 +59,36 @@ int run_main(int argc, char** argv, const RunArgs& args) {
   }
 
   try {
-    const bool existing = args.resume && fs::exists(path);
+    const bool existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
+    const std::string toml = io::to_toml(cfg);
     io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
     H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
-    io::h5::File file = existing ? io::h5::File::open(path, true, fapl.id())
-                                 : io::h5::File::create(path, args.force, fapl.id());
-    const std::string toml = io::to_toml(cfg);
+    if (!existing) {
+      // a new run file is made under a temporary name and renamed into place when its provenance is
+      // written, so a file at `path` is always a complete run file (and gets a checkpoint at once)
+      const std::string tmp = path + ".new";
+      {
+        io::h5::File fresh = io::h5::File::create(tmp, true, fapl.id());
+        fresh.write_string("format", "divcoll-run");
+        fresh.write_int("version", 1);
+        fresh.write_string("divcoll_version", DIVCOLL_VERSION);
+        fresh.write_string("git_commit", DIVCOLL_GIT_COMMIT);
+        fresh.write_int("seed", static_cast<int64_t>(cfg.run.seed));
+        fresh.write_string("config", toml);
+        fresh.write_string("start_time", now_iso());
+        char host[256] = {0};
+        gethostname(host, sizeof host - 1);
+        fresh.write_string("hostname", host);
+        fresh.close();
+      }
+      MPI_Barrier(MPI_COMM_WORLD);
+      if (rank == 0) {
+        fs::remove(checkpoint_path(path));
+        fs::rename(tmp, path);
+      }
+      MPI_Barrier(MPI_COMM_WORLD);
+    }
+    io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) {
       DIVCOLL_THROW_UNLESS(file.has_attribute("format") && file.read_string("format") == "divcoll-run",
                            path << " is not a divcoll run file");
@@ -77,18 +102,9 @@ int run_main(int argc, char** argv, const RunArgs& args) {
         throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
       }
       file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    } else {
-      file.write_string("format", "divcoll-run");
-      file.write_int("version", 1);
-      file.write_string("divcoll_version", DIVCOLL_VERSION);
-      file.write_string("git_commit", DIVCOLL_GIT_COMMIT);
-      file.write_int("seed", static_cast<int64_t>(cfg.run.seed));
-      file.write_string("config", toml);
-      file.write_string("start_time", now_iso());
-      char host[256] = {0};
-      gethostname(host, sizeof host - 1);
-      file.write_string("hostname", host);
     }
+    auto ckpt = [&] { checkpoint(MPI_COMM_WORLD, file, path); };
+    if (!existing) ckpt();
     file.write_int("ranks", size);
     if (rank == 0)
       std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, DIVCOLL_GIT_COMMIT,
@@ -97,12 +113,13 @@ int run_main(int argc, char** argv, const RunArgs& args) {
 
     const auto t0 = std::chrono::steady_clock::now();
     if (io::stage_enabled(cfg, "agents") || args.agents_only) {
-      run_agents_stage(MPI_COMM_WORLD, cfg, file);
+      run_agents_stage(MPI_COMM_WORLD, cfg, file, ckpt);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       file.group("agents").write_double("wall_s_last_session", wall);
     }
     file.write_string("end_time", now_iso());
     file.close();
+    remove_checkpoint(MPI_COMM_WORLD, path);
     if (rank == 0) std::printf("done: %s\n", path.c_str());
   } catch (const InputError& e) {
     // a failure after work started may be on one rank only: stop every rank, keep what was written

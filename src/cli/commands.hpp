@@ -48,6 +48,9 @@ struct GdCompareArgs {
 };
 int gd_compare(const GdCompareArgs& a);
 
+// divcoll compare A B: 0 if every dataset is bit-identical, 1 if not
+int compare(const std::string& a, const std::string& b);
+
 // divcoll envs: the built-in environments
 int envs();
 

@@ -1,0 +1,121 @@
+#include "mpi/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "common/check.hpp"
+
+namespace divcoll::mpi {
+namespace fs = std::filesystem;
+
+std::string checkpoint_path(const std::string& run_path) { return run_path + ".ckpt"; }
+
+namespace {
+
+// copies src to dst through dst.tmp, fsyncs, renames: dst is always either the old or the new copy
+void atomic_copy(const std::string& src, const std::string& dst) {
+  const std::string tmp = dst + ".tmp";
+  fs::copy_file(src, tmp, fs::copy_options::overwrite_existing);
+  const int fd = ::open(tmp.c_str(), O_RDONLY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+  fs::rename(tmp, dst);
+}
+
+// one int from rank 0 to all
+int bcast_int(MPI_Comm comm, int v) {
+  MPI_Bcast(&v, 1, MPI_INT, 0, comm);
+  return v;
+}
+
+}  // namespace
+
+void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) {
+  H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
+  MPI_Barrier(comm);
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  int ok = 1;
+  std::string err;
+  if (rank == 0) {
+    try {
+      atomic_copy(run_path, checkpoint_path(run_path));
+    } catch (const std::exception& e) {
+      ok = 0;
+      err = e.what();
+    }
+  }
+  if (!bcast_int(comm, ok)) throw InputError(msg() << "cannot write the checkpoint " << checkpoint_path(run_path) << ": " << err);
+}
+
+bool valid_run_file(const std::string& path, std::string* why) {
+  try {
+    io::h5::File f = io::h5::File::open(path);
+    if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
+      if (why) *why = "not a complete divcoll run file";
+      return false;
+    }
+    // every dataset must read back
+    int bad = 0;
+    auto visit = [](hid_t obj, const char* name, const H5O_info_t* info, void* data) -> herr_t {
+      if (info->type != H5O_TYPE_DATASET) return 0;
+      io::h5::Handle d(H5Dopen2(obj, name, H5P_DEFAULT), H5Dclose);
+      if (!d.valid()) return ++*static_cast<int*>(data), 0;
+      io::h5::Handle space(H5Dget_space(d.id()), H5Sclose);
+      io::h5::Handle type(H5Dget_type(d.id()), H5Tclose);
+      const size_t n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.id())) * H5Tget_size(type.id());
+      std::string buf(n, '\0');
+      if (n > 0 && H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) ++*static_cast<int*>(data);
+      return 0;
+    };
+    if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &bad) < 0 || bad > 0) {
+      if (why) *why = "some of its datasets do not read back";
+      return false;
+    }
+    return true;
+  } catch (const std::exception& e) {
+    if (why) *why = e.what();
+    return false;
+  }
+}
+
+bool prepare_resume(MPI_Comm comm, const std::string& run_path) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  // 0: start from nothing, 1: continue, 2: damaged without checkpoint
+  int decision = 0;
+  std::string why;
+  if (rank == 0) {
+    const std::string ck = checkpoint_path(run_path);
+    const bool have_run = fs::exists(run_path), have_ck = fs::exists(ck);
+    if (have_run && valid_run_file(run_path, &why)) {
+      decision = 1;
+    } else if (have_ck && valid_run_file(ck, nullptr)) {
+      if (have_run) std::printf("resume: %s is damaged (%s); restoring the checkpoint %s\n", run_path.c_str(), why.c_str(), ck.c_str());
+      fs::copy_file(ck, run_path, fs::copy_options::overwrite_existing);
+      decision = 1;
+    } else if (have_run) {
+      decision = 2;
+    }
+  }
+  decision = bcast_int(comm, decision);
+  if (decision == 2)
+    throw InputError(msg() << run_path << " cannot be resumed: " << (rank == 0 ? why : std::string("damaged"))
+                           << ", and it has no usable checkpoint; pass --force to start over");
+  return decision == 1;
+}
+
+void remove_checkpoint(MPI_Comm comm, const std::string& run_path) {
+  MPI_Barrier(comm);
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) fs::remove(checkpoint_path(run_path));
+}
+
+}  // namespace divcoll::mpi
