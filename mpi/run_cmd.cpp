@@ -42,6 +42,7 @@ int run_main(int argc, char** argv, const RunArgs& args) {
   // everything that can be refused is refused here, identically on every rank, before any work
   io::RunConfig cfg;
   std::string path;
+  bool existing = false;
   try {
     cfg = io::load_config(args.config, args.overrides);
     path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
@@ -53,13 +54,34 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     MPI_Barrier(MPI_COMM_WORLD);
     DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
     DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+    // a run resumes only with the config it started with (checked read-only, before anything is opened
+    // for writing; rank 0 reads, every rank gets the verdict)
+    existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
+    if (existing) {
+      std::string diff;
+      if (rank == 0) {
+        io::h5::File f = io::h5::File::open(path);
+        if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
+          diff = " (not a divcoll run file)";
+        } else {
+          const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
+          const auto a = io::flat(before), b = io::flat(cfg);
+          for (size_t i = 0; i < a.size(); ++i)
+            if (a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+        }
+      }
+      int len = static_cast<int>(diff.size());
+      MPI_Bcast(&len, 1, MPI_INT, 0, MPI_COMM_WORLD);
+      diff.resize(len);
+      MPI_Bcast(diff.data(), len, MPI_CHAR, 0, MPI_COMM_WORLD);
+      if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+    }
   } catch (const InputError& e) {
     if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
     return 2;
   }
 
   try {
-    const bool existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
     const std::string toml = io::to_toml(cfg);
     io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
     H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
@@ -89,20 +111,7 @@ int run_main(int argc, char** argv, const RunArgs& args) {
       MPI_Barrier(MPI_COMM_WORLD);
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
-    if (existing) {
-      DIVCOLL_THROW_UNLESS(file.has_attribute("format") && file.read_string("format") == "divcoll-run",
-                           path << " is not a divcoll run file");
-      // a run resumes only with the config it started with
-      const io::RunConfig before = io::parse_config(file.read_string("config"), path + " (stored config)");
-      if (!(before == cfg)) {
-        std::string diff;
-        const auto a = io::flat(before), b = io::flat(cfg);
-        for (size_t i = 0; i < a.size(); ++i)
-          if (a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " → " + b[i].second + ")";
-        throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
-      }
-      file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    }
+    if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
     auto ckpt = [&] { checkpoint(MPI_COMM_WORLD, file, path); };
     if (!existing) ckpt();
     file.write_int("ranks", size);

@@ -11,6 +11,7 @@
 
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
+#include "io/h5.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
 
@@ -88,6 +89,19 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
       {"scene --kind chain --agents 1 --out " + path("s.h5"), "--agents"},
       {"scene --kind blob --out " + path("s.h5"), "--kind"},
       {"frobnicate", "unknown command 'frobnicate'"},
+      // run configs: refused before any work, naming the key and the allowed range
+      {"evolve " + testing::source_dir() + "/configs/tiny.toml agents.population=0 --out " + path("r.h5"),
+       "agents.population"},
+      {"evolve " + testing::source_dir() + "/configs/tiny.toml agents.populaton=5 --out " + path("r.h5"),
+       "did you mean agents.population"},
+      {"evolve " + testing::source_dir() + "/configs/tiny.toml agents.episode_steps=0 --out " + path("r.h5"),
+       "agents.episode_steps"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml scaling.sizes=1,3 --out " + path("r.h5"), "scaling.sizes"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml connectors.batch_pairs=50 --out " + path("r.h5"),
+       "agents.population"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml deploy.environments=flat,moon --out " + path("r.h5"),
+       "moon"},
+      {"evolve " + path("text.h5") + " --out " + path("r.h5"), "text.h5"},
   };
   // bad input exits 2 (an internal failure would exit 1, a crash 134)
   for (const Case& c : cases) {
@@ -96,6 +110,7 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << "\n" << r.out;
   }
   EXPECT_FALSE(fs::exists(path("o.h5")));
+  EXPECT_FALSE(fs::exists(path("r.h5")));
   EXPECT_FALSE(fs::exists(path("s.h5")));
 }
 
@@ -109,6 +124,30 @@ TEST_F(Cli, SceneCommandWritesAChainThatSimulates) {
   const Exec r = run("simulate --scene " + path("c.h5") + " --steps 50 --out " + path("t.h5"));
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("status ok"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace divcoll
+
+namespace divcoll {
+namespace {
+
+TEST_F(Cli, ExistingRunFileIsNeitherOverwrittenNorResumedWithAnotherConfig) {
+  const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
+  const std::string env = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ";
+  ASSERT_EQ(std::system((env + testing::divcoll_binary() + " evolve " + cfg + " --out " + path("r.h5") + " > /dev/null").c_str()), 0);
+  const auto before = fs::last_write_time(path("r.h5"));
+  const Exec again = run("evolve " + cfg + " --out " + path("r.h5"));
+  EXPECT_EQ(again.code, 2) << again.out;
+  EXPECT_NE(again.out.find("--resume"), std::string::npos) << again.out;
+  const Exec other = run("evolve " + cfg + " agents.epochs=3 --out " + path("r.h5") + " --resume");
+  EXPECT_NE(other.code, 0) << other.out;
+  EXPECT_NE(other.out.find("agents.epochs"), std::string::npos) << other.out;
+  EXPECT_EQ(fs::last_write_time(path("r.h5")), before);
+  // the finished run resumes to itself
+  const Exec same = run("evolve " + cfg + " --out " + path("r.h5") + " --resume");
+  EXPECT_EQ(same.code, 0) << same.out;
+  EXPECT_NE(same.out.find("already done"), std::string::npos) << same.out;
 }
 
 }  // namespace
