@@ -280,7 +280,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     for (size_t i = 0; i < pool.size(); ++i) rows[i].ind = &pool[i];
     if (rank == 0) {
       std::vector<double> uniq;
-      const std::vector<int> keep = evo::select_survivors(pool, P, A.uniqueness_k, &uniq);
+      const std::vector<int> keep = evo::select_survivors(pool, P, A.uniqueness_k, &uniq, A.selection == "rank");
       std::vector<evo::Individual> next;
       for (int i : keep) rows[i].survived = 1, next.push_back(pool[i]);
       for (size_t i = 0; i < pool.size(); ++i) rows[i].uniqueness = uniq[i];
@@ -318,7 +318,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     if (rank == 0) {
       std::vector<double> uniq;
       std::vector<evo::Individual> pop = population;
-      evo::select_survivors(pop, P, A.uniqueness_k, &uniq);
+      evo::select_survivors(pop, P, A.uniqueness_k, &uniq, A.selection == "rank");
       for (int i = 0; i < P; ++i) rows[i].uniqueness = uniq[i];
     }
     write_pool(comm, file, "agents/final", rows, owner, rank, A.epochs);

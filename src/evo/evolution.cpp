@@ -1,5 +1,6 @@
 #include "evo/evolution.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -41,8 +42,20 @@ collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, cons
   return child;
 }
 
+namespace {
+// rank of each value among `v` (0 = lowest; ties broken by index)
+std::vector<double> ranks(const std::vector<double>& v) {
+  std::vector<int> order(v.size());
+  for (size_t i = 0; i < v.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return v[a] < v[b]; });
+  std::vector<double> r(v.size());
+  for (size_t q = 0; q < order.size(); ++q) r[order[q]] = static_cast<double>(q);
+  return r;
+}
+}  // namespace
+
 std::vector<int> select_survivors(const std::vector<Individual>& pool, int keep, int k,
-                                  std::vector<double>* uniqueness_out) {
+                                  std::vector<double>* uniqueness_out, bool rank) {
   const int n = static_cast<int>(pool.size());
   std::vector<int> alive(n);
   for (int i = 0; i < n; ++i) alive[i] = i;
@@ -62,11 +75,13 @@ std::vector<int> select_survivors(const std::vector<Individual>& pool, int keep,
       if (failed(alive[q])) victim = q;
     if (victim < 0) {
       const std::vector<double> u = uniq_of(alive);
-      double fmin = std::numeric_limits<double>::infinity();
-      for (int i : alive) fmin = std::min(fmin, pool[i].train.fitness_bl);
+      std::vector<double> f;
+      for (int i : alive) f.push_back(pool[i].train.fitness_bl);
+      const double fmin = *std::min_element(f.begin(), f.end());
+      const std::vector<double> fr = rank ? ranks(f) : std::vector<double>{}, ur = rank ? ranks(u) : std::vector<double>{};
       double worst = std::numeric_limits<double>::infinity();
       for (int q = 0; q < static_cast<int>(alive.size()); ++q) {
-        const double score = (pool[alive[q]].train.fitness_bl - fmin + 1e-6) * u[q];
+        const double score = rank ? (fr[q] + 1) * (ur[q] + 1) : (f[q] - fmin + 1e-6) * u[q];
         if (score < worst) worst = score, victim = q;  // ties: the lowest index
       }
     }

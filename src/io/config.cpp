@@ -133,6 +133,10 @@ const std::vector<Key>& schema() {
             DIVCOLL_FIELD(agents.spring_flip_p)),
         num("agents", "rest_jitter_sd", T::Double, "0.005", "[0, 0.05]", "u",
             "mutation: standard deviation of the rest-position jitter", DIVCOLL_FIELD(agents.rest_jitter_sd)),
+        pick("agents", "selection", T::Choice, "\"rank\"", {"paper", "rank"},
+             "deletion score: paper = (fitness - min fitness + 1e-6) x uniqueness; rank = (fitness rank + 1) x "
+             "(uniqueness rank + 1) among the remaining pool",
+             DIVCOLL_FIELD(agents.selection)),
         num("agents", "uniqueness_k", T::Int, "5", "[1, 1000]", "agents",
             "nearest neighbours averaged in the uniqueness score", DIVCOLL_FIELD(agents.uniqueness_k)),
         flag("agents", "body_fixed", "false",

@@ -38,6 +38,7 @@ struct RunConfig {
     double body_flip_p{};      // per body bit
     double spring_flip_p{};    // per spring bit
     double rest_jitter_sd{};   // u, offspring rest-position jitter
+    std::string selection;     // deletion score: "paper" or "rank"
     int uniqueness_k{};        // nearest neighbours in the uniqueness score
     bool body_fixed{};         // one body shape for all (graded-diversity variant, SPEC §7.5)
     bool springs_fixed{};      // one spring genotype for all

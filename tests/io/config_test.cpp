@@ -82,10 +82,10 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
 
 TEST(ConfigPresets, QuickIsTheDemoScale) {
   const RunConfig q = load_config(preset("quick.toml"));
-  EXPECT_EQ(q.agents.population, 12);
-  EXPECT_EQ(q.agents.generations, 3);
-  EXPECT_EQ(q.agents.epochs, 6);
-  EXPECT_EQ(q.agents.episode_steps, 400);
+  EXPECT_EQ(q.agents.population, 24);
+  EXPECT_EQ(q.agents.generations, 6);
+  EXPECT_EQ(q.agents.epochs, 10);
+  EXPECT_EQ(q.agents.episode_steps, 1000);
   EXPECT_EQ(q.connectors.replicates, 2);
   EXPECT_EQ(q.connectors.iterations, 8);
   EXPECT_EQ(q.connectors.batch_pairs, 8);
@@ -119,7 +119,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "agents.rest_length_max",
                                              "agents.body_flip_p",
                                              "agents.spring_flip_p",
-                                             "agents.rest_jitter_sd",
+                                             "agents.rest_jitter_sd", "agents.selection",
                                              "agents.uniqueness_k",
                                              "agents.body_fixed",
                                              "agents.springs_fixed",
@@ -382,7 +382,7 @@ TEST(ConfigRoundTrip, FlatPairsAreOverrides) {
       if (key == k) return value;
     return std::string("?");
   };
-  EXPECT_EQ(find("agents.population"), "12");
+  EXPECT_EQ(find("agents.population"), "24");
   EXPECT_EQ(find("run.name"), "quick");
   EXPECT_EQ(find("agents.gd_step"), "0.16");
   EXPECT_EQ(find("scaling.sizes"), "[3, 5]");
