@@ -343,10 +343,18 @@ void Node::write_rows(const std::string& path, const Dims& dims, const std::vect
                      std::to_string(rows.size()) + " rows of " + dims_string(dims));
   Handle fspace(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
   if (!fspace.valid()) fail(w, "cannot make a dataspace of dims " + dims_string(dims));
-  Handle lcpl = intermediate_lcpl(w);
-  // creation is collective: every rank of the file's communicator calls this
-  Handle d(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
-           H5Dclose);
+  // creation is collective: every rank of the file's communicator calls this; an existing dataset of the
+  // same dims is written in place (checkpointed state, curves filled as a run goes)
+  Handle d;
+  if (has(path)) {
+    if (this->dims(path) != dims) throw InputError(w + ": exists with dims " + dims_string(this->dims(path)) +
+                                                   ", not " + dims_string(dims));
+    d = Handle(H5Dopen2(id(), path.c_str(), H5P_DEFAULT), H5Dclose);
+  } else {
+    Handle lcpl = intermediate_lcpl(w);
+    d = Handle(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
+               H5Dclose);
+  }
   if (!d.valid()) fail(w, "cannot create the dataset");
   // this rank's rows, as a union of one-row hyperslabs (or none)
   Dims start(dims.size(), 0), count = dims;

@@ -1,0 +1,253 @@
+#include "mpi/connectors_stage.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "collective/pairs.hpp"
+#include "common/check.hpp"
+#include "morph/body.hpp"
+#include "mpi/agents_stage.hpp"
+#include "mpi/protocol.hpp"
+#include "mpi/scheduler.hpp"
+
+namespace divcoll::mpi {
+namespace {
+
+using io::h5::Dims;
+
+// one pair episode of one connector
+struct PairTask {
+  int32_t connector = 0, a = 0, b = 0;
+};
+struct PairDone {
+  double travel_u = 0, travel_bl = 0;
+  uint8_t status = 0;
+  std::vector<double> grad;
+};
+
+template <class Ar>
+void serialize(Ar& ar, PairTask& t, unsigned) {
+  ar & t.connector & t.a & t.b;
+}
+template <class Ar>
+void serialize(Ar& ar, PairDone& d, unsigned) {
+  ar & d.travel_u & d.travel_bl & d.status & d.grad;
+}
+
+void bcast_doubles(MPI_Comm comm, std::vector<double>& v) {
+  int64_t n = static_cast<int64_t>(v.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
+  v.resize(n);
+  MPI_Bcast(v.data(), static_cast<int>(n), MPI_DOUBLE, 0, comm);
+}
+
+}  // namespace
+
+std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string bytes;
+  if (rank == 0) {
+    std::vector<collective::Agent> agents;
+    for (const evo::Individual& x : read_final_population(file)) agents.push_back(x.agent);
+    bytes = pack(agents);
+  }
+  int64_t n = static_cast<int64_t>(bytes.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
+  bytes.resize(n);
+  MPI_Bcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm);
+  std::vector<collective::Agent> agents = unpack<std::vector<collective::Agent>>(bytes);
+  // anchors from each agent's own 1000-step run on flat: the same on every rank
+  for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+  return agents;
+}
+
+void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                          const std::function<void()>& checkpoint) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const auto& C = cfg.connectors;
+  const std::vector<std::string>& kinds = C.kinds;
+  const int K = static_cast<int>(kinds.size()), R = C.replicates, B = C.batch_pairs, I = C.iterations;
+  const int N = K * R;
+  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const int pop = static_cast<int>(agents.size());
+  const int P = static_cast<int>(collective::Agent{}.params.size());
+  (void)P;
+  const int Pc = sim::connector_param_count();
+
+  if (!file.has("connectors")) file.create_group("connectors");
+  io::h5::Node stage = file.group("connectors");
+  stage.write_string("status", "running");
+  std::string kind_list;
+  for (const auto& k : kinds) kind_list += (kind_list.empty() ? "" : ",") + k;
+  stage.write_string("kinds", kind_list);
+  stage.write_int("replicates", R);
+  if (!file.has("connectors/anchors")) {
+    std::vector<int64_t> rows;
+    std::vector<int32_t> an;
+    if (rank == 0)
+      for (int i = 0; i < pop; ++i) {
+        rows.push_back(i);
+        const auto& x = agents[i].anchors;
+        an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
+      }
+    file.write_rows<int32_t>("connectors/anchors", {static_cast<hsize_t>(pop), 4}, rows, an);
+  }
+
+  // state: weights and Adam moments of every connector (index c = kind·R + replicate)
+  int done = stage.has_attribute("iterations_done") ? static_cast<int>(stage.read_int("iterations_done")) : 0;
+  std::vector<std::vector<double>> params(N);
+  std::vector<collective::Adam> adam(N);
+  if (rank == 0) {
+    if (done > 0) {
+      const auto p = file.read<double>("connectors/state/params");
+      const auto m = file.read<double>("connectors/state/adam_m");
+      const auto v = file.read<double>("connectors/state/adam_v");
+      for (int c = 0; c < N; ++c) {
+        params[c].assign(p.begin() + c * Pc, p.begin() + (c + 1) * Pc);
+        adam[c].m.assign(m.begin() + c * Pc, m.begin() + (c + 1) * Pc);
+        adam[c].v.assign(v.begin() + c * Pc, v.begin() + (c + 1) * Pc);
+      }
+      std::printf("connectors: resuming after iteration %d\n", done);
+    } else {
+      for (int c = 0; c < N; ++c) {
+        Rng rng = make_rng(cfg.run.seed, kConnectorsStage + c, 1000000);
+        params[c] = morph::init_connector_params(rng);
+        adam[c].m.assign(Pc, 0.0);
+        adam[c].v.assign(Pc, 0.0);
+      }
+    }
+  }
+
+  auto write_state = [&] {
+    std::vector<int64_t> rows;
+    std::vector<double> p, m, v;
+    if (rank == 0)
+      for (int c = 0; c < N; ++c) {
+        rows.push_back(c);
+        p.insert(p.end(), params[c].begin(), params[c].end());
+        m.insert(m.end(), adam[c].m.begin(), adam[c].m.end());
+        v.insert(v.end(), adam[c].v.begin(), adam[c].v.end());
+      }
+    const Dims d = {static_cast<hsize_t>(N), static_cast<hsize_t>(Pc)};
+    file.write_rows<double>("connectors/state/params", d, rows, p);
+    file.write_rows<double>("connectors/state/adam_m", d, rows, m);
+    file.write_rows<double>("connectors/state/adam_v", d, rows, v);
+  };
+
+  sim::Simulator sim;
+  std::vector<double> flat_params;  // all connectors' weights, broadcast each iteration
+  auto compute = [&](const std::string& bytes) {
+    const PairTask t = unpack<PairTask>(bytes);
+    const std::string& kind = kinds[t.connector / R];
+    const double k = collective::kind_is_weak(kind) ? C.weak_stiffness : C.strong_stiffness;
+    const std::vector<double> w(flat_params.begin() + static_cast<size_t>(t.connector) * Pc,
+                                flat_params.begin() + static_cast<size_t>(t.connector + 1) * Pc);
+    const collective::PairOutcome o =
+        collective::run_pair(sim, agents[t.a], agents[t.b], w, k, "flat", C.episode_steps, true);
+    PairDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad};
+    return pack(d);
+  };
+
+  const auto t_stage = std::chrono::steady_clock::now();
+  for (int it = done; it < I; ++it) {
+    const auto t0 = std::chrono::steady_clock::now();
+    flat_params.clear();
+    if (rank == 0)
+      for (const auto& p : params) flat_params.insert(flat_params.end(), p.begin(), p.end());
+    bcast_doubles(comm, flat_params);
+    // this iteration's batches: uniform kinds use agent i with its clone, diverse kinds fresh random pairs
+    std::vector<std::string> items;
+    std::vector<std::vector<std::pair<int, int>>> batch(N);
+    for (int c = 0; c < N; ++c) {
+      if (collective::kind_is_diverse(kinds[c / R])) {
+        Rng rng = make_rng(cfg.run.seed, kConnectorsStage + c, it);
+        batch[c] = collective::random_pairs(rng, pop, B);
+      } else {
+        batch[c] = collective::uniform_pairs(B);
+      }
+      if (rank == 0)
+        for (const auto& [a, b] : batch[c]) items.push_back(pack(PairTask{c, a, b}));
+    }
+    const FarmResult fr = farm(comm, items, compute);
+
+    // the master sums each connector's gradients in pair order and steps
+    std::vector<double> curve_u(N, std::numeric_limits<double>::quiet_NaN()), curve_bl = curve_u, nan_pairs(N, 0);
+    if (rank == 0) {
+      for (int c = 0; c < N; ++c) {
+        std::vector<double> g(Pc, 0.0);
+        double su = 0, sb = 0;
+        int ok = 0;
+        for (int p = 0; p < B; ++p) {
+          const PairDone d = unpack<PairDone>(fr.results[static_cast<size_t>(c) * B + p]);
+          if (d.status != 0 || !std::isfinite(d.travel_u)) {
+            ++nan_pairs[c];
+            continue;
+          }
+          ++ok;
+          su += d.travel_u;
+          sb += d.travel_bl;
+          for (int q = 0; q < Pc; ++q) g[q] += d.grad[q];
+        }
+        if (ok == 0) continue;
+        curve_u[c] = su / ok;
+        curve_bl[c] = sb / ok;
+        // loss = −mean travel
+        for (double& x : g) x = -x / ok;
+        if (C.optimizer == "adam")
+          adam[c].step(params[c], g, C.lr, C.clip_norm, it + 1);
+        else
+          collective::normalized_step(params[c], g, C.lr);
+      }
+    }
+    // curves: row `it` of each kind's (I × R) datasets
+    for (int k = 0; k < K; ++k) {
+      std::vector<int64_t> rows;
+      std::vector<double> u, b, n;
+      if (rank == 0) {
+        rows.push_back(it);
+        for (int r = 0; r < R; ++r) u.push_back(curve_u[k * R + r]), b.push_back(curve_bl[k * R + r]),
+                                      n.push_back(nan_pairs[k * R + r]);
+      }
+      const Dims d = {static_cast<hsize_t>(I), static_cast<hsize_t>(R)};
+      file.write_rows<double>("connectors/" + kinds[k] + "/curve_u", d, rows, u);
+      file.write_rows<double>("connectors/" + kinds[k] + "/curve_bl", d, rows, b);
+      file.write_rows<double>("connectors/" + kinds[k] + "/nan_pairs", d, rows, n);
+    }
+    if ((it + 1) % cfg.output.checkpoint_every == 0 || it + 1 == I) {
+      write_state();
+      stage.write_int("iterations_done", it + 1);
+      checkpoint();
+    }
+    if (rank == 0) {
+      const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
+      std::printf("connectors: iteration %d/%d:", it + 1, I);
+      for (int k = 0; k < K; ++k) {
+        double m = 0;
+        for (int r = 0; r < R; ++r) m += curve_bl[k * R + r] / R;
+        std::printf(" %s %.3f", kinds[k].c_str(), m);
+      }
+      std::printf(" BL; %.0f pair-episodes/s, %.0f s, ETA %.0f s\n", N * B / dt, el, (I - it - 1) * dt);
+      std::fflush(stdout);
+    }
+  }
+
+  // the trained weights per kind
+  if (rank == 0 && done >= I) std::printf("connectors: all %d iterations were already done\n", I);
+  for (int k = 0; k < K; ++k) {
+    std::vector<int64_t> rows;
+    std::vector<double> w;
+    if (rank == 0)
+      for (int r = 0; r < R; ++r) rows.push_back(r), w.insert(w.end(), params[k * R + r].begin(), params[k * R + r].end());
+    file.write_rows<double>("connectors/" + kinds[k] + "/params", {static_cast<hsize_t>(R), static_cast<hsize_t>(Pc)},
+                            rows, w);
+  }
+  stage.write_string("status", "complete");
+  checkpoint();
+}
+
+}  // namespace divcoll::mpi

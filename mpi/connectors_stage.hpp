@@ -1,0 +1,34 @@
+// the connectors stage (SPEC §6): every connector of every kind and replicate trained by backpropagation
+// through its pairs, all in lock-step so that one round of work has K·R·B pair episodes to spread over
+// the ranks. The master sums each connector's per-pair gradients in pair order (so the sum does not
+// depend on who computed what), takes one optimizer step per connector, and broadcasts the weights.
+//
+// Run file (group /connectors; attributes status, iterations_done, kinds, replicates):
+//   <kind>/params      (R × P_c)   trained weights, written when the stage completes
+//   <kind>/curve_u     (I × R)     mean pair travel of each iteration's batch, u (before that step)
+//   <kind>/curve_bl    (I × R)     the same in body lengths
+//   <kind>/nan_pairs   (I × R)     pairs of the batch whose episode was not ok (left out of the mean)
+//   state/params, state/adam_m, state/adam_v  (K·R × P_c)  the optimizer state at the last checkpoint
+//   anchors            (P × 4)     each agent's back foot, front foot, back upper, front upper (§6.1)
+#pragma once
+
+#include <mpi.h>
+
+#include <functional>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "io/config.hpp"
+#include "io/h5.hpp"
+
+namespace divcoll::mpi {
+
+inline constexpr uint64_t kConnectorsStage = 2000;
+
+// the final agent population of the run file on every rank, with anchors computed (deterministically)
+std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file);
+
+void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                          const std::function<void()>& checkpoint);
+
+}  // namespace divcoll::mpi

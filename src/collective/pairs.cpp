@@ -1,0 +1,90 @@
+#include "collective/pairs.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "common/check.hpp"
+
+namespace divcoll::collective {
+
+bool kind_is_weak(const std::string& kind) { return kind.rfind("weak", 0) == 0; }
+bool kind_is_diverse(const std::string& kind) { return kind.find("diverse") != std::string::npos; }
+
+std::vector<std::pair<int, int>> uniform_pairs(int n) {
+  std::vector<std::pair<int, int>> p;
+  for (int i = 0; i < n; ++i) p.emplace_back(i, i);
+  return p;
+}
+
+std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n) {
+  DIVCOLL_THROW_UNLESS(population >= 2, "diverse pairs need at least 2 agents");
+  std::vector<std::pair<int, int>> p;
+  for (int q = 0; q < n; ++q) {
+    const int a = static_cast<int>(uniform_int(rng, population));
+    int b = static_cast<int>(uniform_int(rng, population - 1));
+    if (b >= a) ++b;  // a different agent
+    p.emplace_back(a, b);
+  }
+  return p;
+}
+
+namespace {
+double bl(const Agent& a) {
+  double lo = a.rest_pos[0], hi = a.rest_pos[0];
+  for (int q = 0; q < sim::kAgentMasses; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
+  return hi - lo;
+}
+}  // namespace
+
+PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
+                     double stiffness, const std::string& env, int steps, bool grad) {
+  const sim::Scene s = pair_scene(P, A, params, stiffness, env);
+  sim::RunOptions opt;
+  opt.steps = steps;
+  opt.grad = grad;
+  sim::RunResult r = sim.run(s, opt);
+  PairOutcome o;
+  o.status = r.status;
+  o.travel_u = r.travel;
+  o.travel_bl = r.travel / (0.5 * (bl(P) + bl(A)));
+  if (grad) o.grad = std::move(r.grad_connector_params);
+  return o;
+}
+
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps) {
+  const sim::Scene s = agent_scene(a, env);
+  sim::RunOptions opt;
+  opt.steps = steps;
+  const sim::RunResult r = sim.run(s, opt);
+  PairOutcome o;
+  o.status = r.status;
+  o.travel_u = r.travel;
+  o.travel_bl = r.travel / bl(a);
+  return o;
+}
+
+void Adam::step(std::vector<double>& p, std::vector<double> g, double lr, double clip_norm, int t) {
+  if (m.size() != p.size()) m.assign(p.size(), 0.0), v.assign(p.size(), 0.0);
+  double n2 = 0;
+  for (double x : g) n2 += x * x;
+  const double n = std::sqrt(n2);
+  if (n > clip_norm)
+    for (double& x : g) x *= clip_norm / n;
+  const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
+  const double c1 = 1 - std::pow(b1, t), c2 = 1 - std::pow(b2, t);
+  for (size_t q = 0; q < p.size(); ++q) {
+    m[q] = b1 * m[q] + (1 - b1) * g[q];
+    v[q] = b2 * v[q] + (1 - b2) * g[q] * g[q];
+    p[q] -= lr * (m[q] / c1) / (std::sqrt(v[q] / c2) + eps);
+  }
+}
+
+void normalized_step(std::vector<double>& p, const std::vector<double>& g, double lr) {
+  double n2 = 0;
+  for (double x : g) n2 += x * x;
+  if (n2 <= 0) return;
+  const double n = std::sqrt(n2);
+  for (size_t q = 0; q < p.size(); ++q) p[q] -= lr * g[q] / n;
+}
+
+}  // namespace divcoll::collective

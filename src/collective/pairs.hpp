@@ -1,0 +1,53 @@
+// pairs for connector training and deployment (SPEC §6.4, §7.2): which pairs, one pair's episode with
+// the gradient of its travel w.r.t. the connector weights, and the connector optimizer
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "common/rng.hpp"
+#include "sim/engine.hpp"
+
+namespace divcoll::collective {
+
+// the connector kinds of SPEC §6.4, in their fixed order
+inline const std::vector<std::string>& connector_kinds() {
+  static const std::vector<std::string> k = {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"};
+  return k;
+}
+bool kind_is_weak(const std::string& kind);
+bool kind_is_diverse(const std::string& kind);
+
+// (posterior, anterior) agent indices: agent i with its clone for i < n
+std::vector<std::pair<int, int>> uniform_pairs(int n);
+// n ordered pairs of two different agents out of `population`, drawn from rng
+std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n);
+
+struct PairOutcome {
+  double travel_u = 0;         // u, centre-of-mass displacement (NaN unless ok)
+  double travel_bl = 0;        // travel_u / mean body length of the two agents
+  sim::Status status = sim::Status::ok;
+  std::vector<double> grad;    // d travel_u / d connector params (with grad; zeros unless ok)
+};
+
+// one pair episode: `posterior` left, `anterior` right, joined by the connector `params`
+PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& anterior,
+                     const std::vector<double>& params, double stiffness, const std::string& env, int steps,
+                     bool grad);
+
+// one agent alone: travel in u and BL
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps);
+
+// Adam on a flat parameter vector with global-norm gradient clipping (SPEC §6.4)
+struct Adam {
+  std::vector<double> m, v;  // moments, same size as the parameters
+  // one step of descent on `loss_grad` (the gradient of the loss), t = 1, 2, ... the step number
+  void step(std::vector<double>& params, std::vector<double> loss_grad, double lr, double clip_norm, int t);
+};
+
+// the normalized alternative: θ ← θ − lr·g/‖g‖
+void normalized_step(std::vector<double>& params, const std::vector<double>& loss_grad, double lr);
+
+}  // namespace divcoll::collective
