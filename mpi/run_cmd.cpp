@@ -14,6 +14,7 @@
 #include "mpi/agents_stage.hpp"
 #include "mpi/checkpoint.hpp"
 #include "mpi/connectors_stage.hpp"
+#include "mpi/deploy_stage.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -133,10 +134,16 @@ int run_main(int argc, char** argv, const RunArgs& args) {
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
       file.group("connectors").write_double("wall_s_last_session", wall);
     }
+    if (!args.agents_only && io::stage_enabled(cfg, "deploy")) {
+      const auto t1 = std::chrono::steady_clock::now();
+      run_deploy_stage(MPI_COMM_WORLD, cfg, file, ckpt);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      file.group("deploy").write_double("wall_s_last_session", wall);
+    }
     // the later stages land with their issues; say so rather than pretend
     if (!args.agents_only)
       for (const std::string& st : cfg.run.stages)
-        if (st != "agents" && st != "connectors" && rank == 0)
+        if (st != "agents" && st != "connectors" && st != "deploy" && rank == 0)
           std::printf("stage %s: not implemented yet in this version; skipped\n", st.c_str());
     file.write_string("end_time", now_iso());
     file.close();

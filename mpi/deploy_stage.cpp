@@ -1,0 +1,166 @@
+#include "mpi/deploy_stage.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "collective/pairs.hpp"
+#include "common/check.hpp"
+#include "mpi/connectors_stage.hpp"
+#include "mpi/protocol.hpp"
+#include "mpi/scheduler.hpp"
+
+namespace divcoll::mpi {
+namespace {
+
+using io::h5::Dims;
+
+// one episode: an agent alone (type = −1) or a pair of a collective type
+struct Episode {
+  int32_t type = -1, replicate = 0, a = 0, b = 0;
+};
+struct EpisodeDone {
+  double travel_u = 0, travel_bl = 0;
+  uint8_t status = 0;
+};
+template <class Ar>
+void serialize(Ar& ar, Episode& e, unsigned) {
+  ar & e.type & e.replicate & e.a & e.b;
+}
+template <class Ar>
+void serialize(Ar& ar, EpisodeDone& d, unsigned) {
+  ar & d.travel_u & d.travel_bl & d.status;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+}  // namespace
+
+void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const auto& D = cfg.deploy;
+  const std::vector<std::string>& envs = D.environments;
+  const int E = static_cast<int>(envs.size()), NP = D.pairs;
+  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const int pop = static_cast<int>(agents.size());
+  const int R = cfg.connectors.replicates, Pc = sim::connector_param_count();
+
+  // the collective types: every trained kind on uniform and on diverse pairs
+  std::vector<std::string> types;
+  std::vector<std::vector<std::vector<double>>> weights;  // [type][replicate] → params
+  std::vector<double> stiffness;
+  std::vector<bool> diverse;
+  for (const std::string& kind : cfg.connectors.kinds) {
+    DIVCOLL_THROW_UNLESS(file.has("connectors/" + kind + "/params"),
+                         file.file() << " has no trained " << kind << " connectors: run the connectors stage first");
+    const std::vector<double> w = file.read<double>("connectors/" + kind + "/params");
+    std::vector<std::vector<double>> reps;
+    for (int r = 0; r < R; ++r) reps.emplace_back(w.begin() + r * Pc, w.begin() + (r + 1) * Pc);
+    for (const char* dep : {"uniform", "diverse"}) {
+      types.push_back(kind + "@" + dep);
+      weights.push_back(reps);
+      stiffness.push_back(collective::kind_is_weak(kind) ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness);
+      diverse.push_back(std::string(dep) == "diverse");
+    }
+  }
+  const int T = static_cast<int>(types.size());
+  Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
+  const auto diverse_pairs = collective::random_pairs(prng, pop, NP);
+  const auto uniform_pairs = collective::uniform_pairs(NP);
+
+  if (!file.has("deploy")) file.create_group("deploy");
+  io::h5::Node stage = file.group("deploy");
+  stage.write_string("status", "running");
+  stage.write_string("environments", join(envs));
+  stage.write_string("types", join(types));
+  {
+    std::vector<int64_t> rows;
+    std::vector<int32_t> p;
+    if (rank == 0)
+      for (int q = 0; q < NP; ++q) rows.push_back(q), p.push_back(diverse_pairs[q].first), p.push_back(diverse_pairs[q].second);
+    file.write_rows<int32_t>("deploy/diverse_pairs", {static_cast<hsize_t>(NP), 2}, rows, p);
+  }
+  const int done = stage.has_attribute("envs_done") ? static_cast<int>(stage.read_int("envs_done")) : 0;
+  if (rank == 0 && done > 0) std::printf("deploy: resuming after %d environment(s)\n", done);
+
+  sim::Simulator sim;
+  std::string env_now;
+  auto compute = [&](const std::string& bytes) {
+    const Episode e = unpack<Episode>(bytes);
+    collective::PairOutcome o =
+        e.type < 0 ? collective::run_alone(sim, agents[e.a], env_now, D.episode_steps)
+                   : collective::run_pair(sim, agents[e.a], agents[e.b], weights[e.type][e.replicate], stiffness[e.type],
+                                          env_now, D.episode_steps, false);
+    return pack(EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)});
+  };
+
+  const auto t_stage = std::chrono::steady_clock::now();
+  for (int ei = done; ei < E; ++ei) {
+    env_now = envs[ei];
+    std::vector<std::string> items;
+    if (rank == 0) {
+      for (int i = 0; i < pop; ++i) items.push_back(pack(Episode{-1, 0, i, i}));
+      for (int t = 0; t < T; ++t)
+        for (int r = 0; r < R; ++r)
+          for (int q = 0; q < NP; ++q) {
+            const auto& pr = diverse[t] ? diverse_pairs[q] : uniform_pairs[q];
+            items.push_back(pack(Episode{t, r, pr.first, pr.second}));
+          }
+    }
+    const FarmResult fr = farm(comm, items, compute);
+    // row ei of every dataset, written by the master
+    std::vector<int64_t> rows;
+    std::vector<double> au, ab, cu, cb;
+    std::vector<uint8_t> as, cs;
+    std::vector<double> type_mean(T, 0.0);
+    std::vector<int> type_ok(T, 0), type_bad(T, 0);
+    if (rank == 0) {
+      rows.push_back(ei);
+      for (size_t q = 0; q < fr.results.size(); ++q) {
+        const EpisodeDone d = unpack<EpisodeDone>(fr.results[q]);
+        const bool alone = q < static_cast<size_t>(pop);
+        (alone ? au : cu).push_back(d.travel_u);
+        (alone ? ab : cb).push_back(d.travel_bl);
+        (alone ? as : cs).push_back(d.status);
+        if (!alone) {
+          const int t = static_cast<int>((q - pop) / (static_cast<size_t>(R) * NP));
+          if (d.status == 0 && std::isfinite(d.travel_bl)) type_mean[t] += d.travel_bl, ++type_ok[t];
+          else ++type_bad[t];
+        }
+      }
+    }
+    const hsize_t hE = E, hP = pop, hT = T, hR = R, hN = NP;
+    file.write_rows<double>("deploy/agents/travel_u", {hE, hP}, rows, au);
+    file.write_rows<double>("deploy/agents/travel_bl", {hE, hP}, rows, ab);
+    file.write_rows<uint8_t>("deploy/agents/status", {hE, hP}, rows, as);
+    file.write_rows<double>("deploy/collectives/travel_u", {hE, hT, hR, hN}, rows, cu);
+    file.write_rows<double>("deploy/collectives/travel_bl", {hE, hT, hR, hN}, rows, cb);
+    file.write_rows<uint8_t>("deploy/collectives/status", {hE, hT, hR, hN}, rows, cs);
+    stage.write_int("envs_done", ei + 1);
+    checkpoint();
+    if (rank == 0) {
+      double am = 0;
+      int an = 0;
+      for (size_t i = 0; i < ab.size(); ++i)
+        if (as[i] == 0 && std::isfinite(ab[i])) am += ab[i], ++an;
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
+      std::printf("deploy: %-11s (%d/%d) agents alone %.3f BL |", envs[ei].c_str(), ei + 1, E, an ? am / an : NAN);
+      for (int t = 0; t < T; ++t)
+        std::printf(" %s %.3f%s", types[t].c_str(), type_ok[t] ? type_mean[t] / type_ok[t] : NAN,
+                    type_bad[t] ? (" (" + std::to_string(type_bad[t]) + " not ok)").c_str() : "");
+      std::printf(" | %.0f s, ETA %.0f s\n", el, el / (ei + 1 - done) * (E - ei - 1));
+      std::fflush(stdout);
+    }
+  }
+  stage.write_string("status", "complete");
+  checkpoint();
+}
+
+}  // namespace divcoll::mpi

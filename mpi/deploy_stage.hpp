@@ -1,0 +1,27 @@
+// the deployment stage (SPEC §7.1–7.2): every agent alone, and the eight collective types (connector
+// kind trained {weak, strong} × {uniform, diverse}, deployed on {uniform, diverse} pairs), in every
+// environment of deploy.environments, without learning. One round of the task farm per environment,
+// a checkpoint after each.
+//
+// Run file (group /deploy; attributes status, environments, types, envs_done):
+//   diverse_pairs            (pairs × 2)            the fixed list of diverse deployment pairs
+//   agents/travel_bl, travel_u, status              (E × population)
+//   collectives/travel_bl, travel_u, status         (E × types × replicates × pairs)
+// status: 0 ok, 1 nan, 2 unstable; travel is NaN unless ok, and no summary averages over NaN.
+#pragma once
+
+#include <mpi.h>
+
+#include <functional>
+
+#include "io/config.hpp"
+#include "io/h5.hpp"
+
+namespace divcoll::mpi {
+
+inline constexpr uint64_t kDeployStage = 3000;
+
+void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint);
+
+}  // namespace divcoll::mpi
