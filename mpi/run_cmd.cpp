@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <set>
 
 #include "common/check.hpp"
 #include "io/config.hpp"
@@ -68,8 +69,12 @@ int run_main(int argc, char** argv, const RunArgs& args) {
         } else {
           const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
           const auto a = io::flat(before), b = io::flat(cfg);
+          // keys that choose what runs now or how it reports, not what it computes, may change
+          const std::set<std::string> free = {"run.stages", "run.progress_every_s", "output.dir",
+                                              "output.checkpoint_every"};
           for (size_t i = 0; i < a.size(); ++i)
-            if (a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+            if (a[i].second != b[i].second && !free.count(a[i].first))
+              diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
         }
       }
       int len = static_cast<int>(diff.size());
