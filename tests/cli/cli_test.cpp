@@ -2,6 +2,8 @@
 // exit, and nothing that exists is overwritten without --force
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -148,6 +150,55 @@ TEST_F(Cli, ExistingRunFileIsNeitherOverwrittenNorResumedWithAnotherConfig) {
   const Exec same = run("evolve " + cfg + " --out " + path("r.h5") + " --resume");
   EXPECT_EQ(same.code, 0) << same.out;
   EXPECT_NE(same.out.find("already done"), std::string::npos) << same.out;
+}
+
+}  // namespace
+}  // namespace divcoll
+
+namespace divcoll {
+namespace {
+
+// the stages write the datasets they promise, with the shapes the README gives
+TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
+  const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
+  const Exec r = run("run " + cfg + " run.stages=agents,connectors,deploy --out " + path("run.h5"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const io::h5::File f = io::h5::File::open(path("run.h5"));
+  using D = io::h5::Dims;
+  const hsize_t P = 6, G = 2, R = 1, I = 2, E = 4, T = 8, NP = 4, Pa = 3509, Pc = 1473;
+  // agents
+  EXPECT_EQ(f.group("agents").read_string("status"), "complete");
+  for (hsize_t g = 0; g <= G; ++g) {
+    const std::string gen = "agents/gen_00" + std::to_string(g);
+    const hsize_t M = g == 0 ? P : 2 * P;
+    EXPECT_EQ(f.dims(gen + "/params"), (D{M, Pa}));
+    EXPECT_EQ(f.dims(gen + "/rest_pos"), (D{M, 11, 2}));
+    EXPECT_EQ(f.dims(gen + "/survived"), (D{M}));
+    const auto surv = f.read<uint8_t>(gen + "/survived");
+    EXPECT_EQ(std::count(surv.begin(), surv.end(), 1), static_cast<long>(P)) << gen;
+  }
+  EXPECT_EQ(f.dims("agents/final/params"), (D{P, Pa}));
+  // connectors
+  EXPECT_EQ(f.group("connectors").read_string("status"), "complete");
+  const auto anchors = f.read<int32_t>("connectors/anchors", D{P, 4});
+  for (int32_t a : anchors) EXPECT_TRUE(a >= 0 && a < 11);
+  for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
+    const std::string k = std::string("connectors/") + kind;
+    EXPECT_EQ(f.dims(k + "/params"), (D{R, Pc})) << kind;
+    const auto curve = f.read<double>(k + "/curve_bl", D{I, R});
+    for (double c : curve) EXPECT_TRUE(std::isfinite(c)) << kind;
+    for (double w : f.read<double>(k + "/params")) ASSERT_TRUE(std::isfinite(w)) << kind;
+  }
+  // deploy
+  EXPECT_EQ(f.group("deploy").read_string("status"), "complete");
+  EXPECT_EQ(f.dims("deploy/agents/travel_bl"), (D{E, P}));
+  EXPECT_EQ(f.dims("deploy/collectives/travel_bl"), (D{E, T, R, NP}));
+  const auto st = f.read<uint8_t>("deploy/collectives/status");
+  const auto tr = f.read<double>("deploy/collectives/travel_bl");
+  for (size_t q = 0; q < st.size(); ++q) EXPECT_EQ(std::isfinite(tr[q]), st[q] == 0) << "episode " << q;
+  const auto pairs = f.read<int32_t>("deploy/diverse_pairs", D{NP, 2});
+  for (hsize_t q = 0; q < NP; ++q) EXPECT_NE(pairs[2 * q], pairs[2 * q + 1]) << "a diverse pair is two agents";
+  EXPECT_FALSE(fs::exists(path("run.h5.ckpt"))) << "the checkpoint is removed when the run completes";
 }
 
 }  // namespace
