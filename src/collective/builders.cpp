@@ -85,6 +85,8 @@ void place_env(sim::Scene& s, const std::string& env) {
 
 }  // namespace
 
+double body_length(const Agent& a) { return max_x(a) - min_x(a); }
+
 void update_rest_lengths(Agent& a) {
   a.rest_length.resize(a.spring_i.size());
   for (size_t r = 0; r < a.spring_i.size(); ++r) {

@@ -33,6 +33,9 @@ inline constexpr double kWeakConnector = 5e3;
 inline constexpr double kStrongConnector = 3e4;
 inline constexpr double kConnectorAmplitude = 0.6;
 
+// body length of an agent: max x − min x of its rest positions, u (SPEC §1)
+double body_length(const Agent& a);
+
 // a random valid agent with a freshly initialised controller
 Agent random_agent(Rng& rng, const sim::Constants& c = {});
 // rebuilds rest_length from rest_pos (after the rest positions changed)

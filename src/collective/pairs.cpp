@@ -28,14 +28,6 @@ std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n) {
   return p;
 }
 
-namespace {
-double bl(const Agent& a) {
-  double lo = a.rest_pos[0], hi = a.rest_pos[0];
-  for (int q = 0; q < sim::kAgentMasses; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
-  return hi - lo;
-}
-}  // namespace
-
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
                      double stiffness, const std::string& env, int steps, bool grad) {
   const sim::Scene s = pair_scene(P, A, params, stiffness, env);
@@ -46,7 +38,7 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
   PairOutcome o;
   o.status = r.status;
   o.travel_u = r.travel;
-  o.travel_bl = r.travel / (0.5 * (bl(P) + bl(A)));
+  o.travel_bl = r.travel / (0.5 * (body_length(P) + body_length(A)));
   if (grad) o.grad = std::move(r.grad_connector_params);
   return o;
 }
@@ -59,7 +51,7 @@ PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& en
   PairOutcome o;
   o.status = r.status;
   o.travel_u = r.travel;
-  o.travel_bl = r.travel / bl(a);
+  o.travel_bl = r.travel / body_length(a);
   return o;
 }
 

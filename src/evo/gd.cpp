@@ -24,12 +24,6 @@ const char* gd_rule_name(GdRule r) {
   return "?";
 }
 
-double body_length(const collective::Agent& a) {
-  double lo = a.rest_pos[0], hi = a.rest_pos[0];
-  for (int q = 0; q < sim::kAgentMasses; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
-  return hi - lo;
-}
-
 bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta, const GdOptions& opt) {
   const double lo = opt.rest_length_min * 0.05, hi = opt.rest_length_max * 0.05;
   double scale = 1.0;

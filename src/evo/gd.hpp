@@ -39,7 +39,7 @@ struct TrainResult {
 };
 
 // body length of an agent (max x − min x of its rest positions), u
-double body_length(const collective::Agent& a);
+using collective::body_length;
 
 // trains `a` in place and returns its fitness; `sim` is reused workspace
 TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim);
