@@ -43,13 +43,19 @@ collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, cons
 }
 
 namespace {
-// rank of each value among `v` (0 = lowest; ties broken by index)
+// rank of each value among `v` (0 = lowest); tied values share their mean rank
 std::vector<double> ranks(const std::vector<double>& v) {
   std::vector<int> order(v.size());
   for (size_t i = 0; i < v.size(); ++i) order[i] = static_cast<int>(i);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return v[a] < v[b]; });
   std::vector<double> r(v.size());
-  for (size_t q = 0; q < order.size(); ++q) r[order[q]] = static_cast<double>(q);
+  for (size_t q = 0; q < order.size();) {
+    size_t end = q + 1;
+    while (end < order.size() && v[order[end]] == v[order[q]]) ++end;
+    const double mean = 0.5 * static_cast<double>(q + end - 1);
+    for (size_t k = q; k < end; ++k) r[order[k]] = mean;
+    q = end;
+  }
   return r;
 }
 }  // namespace

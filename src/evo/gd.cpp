@@ -30,18 +30,50 @@ bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta,
   for (int attempt = 0; attempt < 5; ++attempt, scale *= 0.5) {
     collective::Agent b = a;
     for (size_t q = 0; q < b.rest_pos.size(); ++q) b.rest_pos[q] += scale * delta[q];
+    // keep min x = 0 and the lowest mass at y = 0; rest lengths are measured after the shift, so they
+    // are exactly the distances between the stored positions
+    double mx = b.rest_pos[0], my = b.rest_pos[1];
+    for (int q = 0; q < sim::kAgentMasses; ++q) mx = std::min(mx, b.rest_pos[2 * q]), my = std::min(my, b.rest_pos[2 * q + 1]);
+    for (int q = 0; q < sim::kAgentMasses; ++q) b.rest_pos[2 * q] -= mx, b.rest_pos[2 * q + 1] -= my;
     collective::update_rest_lengths(b);
     bool ok = true;
     for (double L : b.rest_length) ok = ok && L >= lo && L <= hi;
     if (!ok) continue;
-    // keep min x = 0 and the lowest mass at y = 0
-    double mx = b.rest_pos[0], my = b.rest_pos[1];
-    for (int q = 0; q < sim::kAgentMasses; ++q) mx = std::min(mx, b.rest_pos[2 * q]), my = std::min(my, b.rest_pos[2 * q + 1]);
-    for (int q = 0; q < sim::kAgentMasses; ++q) b.rest_pos[2 * q] -= mx, b.rest_pos[2 * q + 1] -= my;
     a = std::move(b);
     return true;
   }
   return false;
+}
+
+std::vector<double> rest_gradient(const collective::Agent& a, const sim::RunResult& r) {
+  // rest positions enter through x(0) and through the rest lengths. x(0) is the rest positions shifted
+  // so that the lowest mass sits at y = 0: a mass that is lowest on its own lifts or lowers the whole
+  // body when it moves, so its y gets −Σ_k ∂travel/∂x0_k,y as well. Where several masses share the
+  // lowest height this is the upward one-sided derivative (the shift does not move). min x = 0 is the
+  // same for x, but travel does not change under a horizontal translation, so that sum vanishes.
+  std::vector<double> g = r.grad_x0;
+  {
+    int lowest = 0, ties = 0;
+    for (int q = 1; q < sim::kAgentMasses; ++q)
+      if (a.rest_pos[2 * q + 1] < a.rest_pos[2 * lowest + 1]) lowest = q;
+    for (int q = 0; q < sim::kAgentMasses; ++q) ties += a.rest_pos[2 * q + 1] == a.rest_pos[2 * lowest + 1];
+    if (ties == 1) {
+      double lift = 0;
+      for (int q = 0; q < sim::kAgentMasses; ++q) lift += r.grad_x0[2 * q + 1];
+      g[2 * lowest + 1] -= lift;
+    }
+  }
+  for (int q = 0; q < sim::kAgentSprings; ++q) {
+    const int i = a.spring_i[q], j = a.spring_j[q];
+    const double dx = a.rest_pos[2 * i] - a.rest_pos[2 * j], dy = a.rest_pos[2 * i + 1] - a.rest_pos[2 * j + 1];
+    const double L = std::sqrt(dx * dx + dy * dy);
+    const double gl = r.grad_rest_length[q];
+    g[2 * i] += gl * dx / L;
+    g[2 * i + 1] += gl * dy / L;
+    g[2 * j] -= gl * dx / L;
+    g[2 * j + 1] -= gl * dy / L;
+  }
+  return g;
 }
 
 namespace {
@@ -64,18 +96,7 @@ Eval evaluate(const collective::Agent& a, const GdOptions& opt, sim::Simulator& 
   e.travel = r.travel;
   if (!grad) return e;
   e.g_params = std::move(r.grad_agent_params);
-  // rest positions enter through x(0) (a translation of them) and through the rest lengths
-  e.g_rest = r.grad_x0;
-  for (int q = 0; q < sim::kAgentSprings; ++q) {
-    const int i = a.spring_i[q], j = a.spring_j[q];
-    const double dx = a.rest_pos[2 * i] - a.rest_pos[2 * j], dy = a.rest_pos[2 * i + 1] - a.rest_pos[2 * j + 1];
-    const double L = std::sqrt(dx * dx + dy * dy);
-    const double g = r.grad_rest_length[q];
-    e.g_rest[2 * i] += g * dx / L;
-    e.g_rest[2 * i + 1] += g * dy / L;
-    e.g_rest[2 * j] -= g * dx / L;
-    e.g_rest[2 * j + 1] -= g * dy / L;
-  }
+  e.g_rest = rest_gradient(a, r);
   return e;
 }
 

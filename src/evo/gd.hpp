@@ -41,6 +41,10 @@ struct TrainResult {
 // body length of an agent (max x − min x of its rest positions), u
 using collective::body_length;
 
+// the gradient of travel w.r.t. the rest positions (11×2) from a graded run of agent_scene(a, "flat"):
+// through x(0), through the rest lengths, and through the shift that keeps the lowest mass at y = 0
+std::vector<double> rest_gradient(const collective::Agent& a, const sim::RunResult& r);
+
 // trains `a` in place and returns its fitness; `sim` is reused workspace
 TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim);
 

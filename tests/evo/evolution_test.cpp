@@ -183,11 +183,6 @@ TEST(EvolutionOffspring, NoFlipsNoJitterGiveTheParentBack) {
 }
 
 TEST(EvolutionOffspring, NoFlipsNoJitterKeepRestLengthsBitForBit) {
-  GTEST_SKIP() << "bug (last bit): src/evo/evolution.cpp:35 make_offspring always recomputes rest lengths with "
-                  "collective::update_rest_lengths (sqrt(dx²+dy²)), so an unmutated child differs from its parent "
-                  "in the last bit of some rest lengths: a fresh parent's came from morph::agent_geometry "
-                  "(std::hypot), a moved parent's from src/evo/gd.cpp:39, which measures them before the shift "
-                  "to min x = min y = 0 (line 46), so they are not the distances of the stored rest positions";
   const evo::GdOptions gd;
   evo::MutationOptions opt;
   opt.body_flip_p = opt.spring_flip_p = 0;
@@ -322,11 +317,6 @@ TEST(EvolutionSelect, DuplicatePairLosesOneMemberBeforeAUniqueOne) {
 }
 
 TEST(EvolutionSelect, RankScoreBreaksTiesByPoolIndex) {
-  GTEST_SKIP() << "bug: src/evo/evolution.cpp ranks() (used by select_survivors with rank = true) gives tied "
-                  "values distinct ranks in pool-index order, so tied uniqueness or tied fitness decide by "
-                  "index: of two members with equal uniqueness the fitter one at index 0 is deleted, and a "
-                  "unique member at index 0 goes before an identical pair of equal fitness; tied values "
-                  "should share their (mean) rank";
   // two members of equal uniqueness: the fitter one must stay
   std::vector<evo::Individual> two = {member(3.0, at(0)), member(1.0, at(1, 1))};
   EXPECT_EQ(evo::select_survivors(two, 1, 5, nullptr, true), std::vector<int>{0});
