@@ -90,9 +90,9 @@ double body_length(const Agent& a) { return max_x(a) - min_x(a); }
 void update_rest_lengths(Agent& a) {
   a.rest_length.resize(a.spring_i.size());
   for (size_t r = 0; r < a.spring_i.size(); ++r) {
-    const double dx = a.rest_pos[2 * a.spring_i[r]] - a.rest_pos[2 * a.spring_j[r]];
-    const double dy = a.rest_pos[2 * a.spring_i[r] + 1] - a.rest_pos[2 * a.spring_j[r] + 1];
-    a.rest_length[r] = std::sqrt(dx * dx + dy * dy);
+    // the same expression as morph::agent_geometry, so that a recomputed length equals the original bits
+    const int i = a.spring_i[r], j = a.spring_j[r];
+    a.rest_length[r] = std::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
   }
 }
 
