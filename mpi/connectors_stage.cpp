@@ -1,5 +1,6 @@
 #include "mpi/connectors_stage.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -64,58 +65,46 @@ std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node
   return agents;
 }
 
-void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                          const std::function<void()>& checkpoint) {
+std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                                                  const std::vector<collective::Agent>& agents,
+                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
+                                                  const std::function<void()>& checkpoint) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   const auto& C = cfg.connectors;
-  const std::vector<std::string>& kinds = C.kinds;
-  const int K = static_cast<int>(kinds.size()), R = C.replicates, B = C.batch_pairs, I = C.iterations;
-  const int N = K * R;
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const int N = static_cast<int>(slots.size()), B = spec.batch_pairs, I = spec.iterations;
   const int pop = static_cast<int>(agents.size());
-  const int P = static_cast<int>(collective::Agent{}.params.size());
-  (void)P;
   const int Pc = sim::connector_param_count();
-
-  if (!file.has("connectors")) file.create_group("connectors");
-  io::h5::Node stage = file.group("connectors");
-  stage.write_string("status", "running");
-  std::string kind_list;
-  for (const auto& k : kinds) kind_list += (kind_list.empty() ? "" : ",") + k;
-  stage.write_string("kinds", kind_list);
-  stage.write_int("replicates", R);
-  if (!file.has("connectors/anchors")) {
-    std::vector<int64_t> rows;
-    std::vector<int32_t> an;
-    if (rank == 0)
-      for (int i = 0; i < pop; ++i) {
-        rows.push_back(i);
-        const auto& x = agents[i].anchors;
-        an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
-      }
-    file.write_rows<int32_t>("connectors/anchors", {static_cast<hsize_t>(pop), 4}, rows, an);
+  // the groups of the slots, in first-appearance order, with their column counts
+  std::vector<std::string> groups;
+  std::vector<int> columns;
+  for (const ConnectorSlot& s : slots) {
+    const auto at = std::find(groups.begin(), groups.end(), s.group);
+    if (at == groups.end()) groups.push_back(s.group), columns.push_back(s.column + 1);
+    else columns[at - groups.begin()] = std::max(columns[at - groups.begin()], s.column + 1);
   }
+  io::h5::Node stage = file.group(spec.state_group);
 
-  // state: weights and Adam moments of every connector (index c = kind·R + replicate)
+  // state: weights and Adam moments of every slot
   int done = stage.has_attribute("iterations_done") ? static_cast<int>(stage.read_int("iterations_done")) : 0;
   std::vector<std::vector<double>> params(N);
   std::vector<collective::Adam> adam(N);
+  const std::string sg = spec.state_group + "/state/";
   if (rank == 0) {
     if (done > 0) {
-      const auto p = file.read<double>("connectors/state/params");
-      const auto m = file.read<double>("connectors/state/adam_m");
-      const auto v = file.read<double>("connectors/state/adam_v");
+      const auto p = file.read<double>(sg + "params");
+      const auto m = file.read<double>(sg + "adam_m");
+      const auto v = file.read<double>(sg + "adam_v");
       for (int c = 0; c < N; ++c) {
         params[c].assign(p.begin() + c * Pc, p.begin() + (c + 1) * Pc);
         adam[c].m.assign(m.begin() + c * Pc, m.begin() + (c + 1) * Pc);
         adam[c].v.assign(v.begin() + c * Pc, v.begin() + (c + 1) * Pc);
       }
-      std::printf("connectors: resuming after iteration %d\n", done);
+      std::printf("%s: resuming after iteration %d\n", spec.label.c_str(), done);
     } else {
       for (int c = 0; c < N; ++c) {
-        Rng rng = make_rng(cfg.run.seed, kConnectorsStage + c, 1000000);
-        params[c] = morph::init_connector_params(rng);
+        Rng rng = make_rng(cfg.run.seed, slots[c].stream, 1000000);
+        params[c] = morph::init_connector_params(rng, C.init_out_gain);
         adam[c].m.assign(Pc, 0.0);
         adam[c].v.assign(Pc, 0.0);
       }
@@ -133,21 +122,20 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
         v.insert(v.end(), adam[c].v.begin(), adam[c].v.end());
       }
     const Dims d = {static_cast<hsize_t>(N), static_cast<hsize_t>(Pc)};
-    file.write_rows<double>("connectors/state/params", d, rows, p);
-    file.write_rows<double>("connectors/state/adam_m", d, rows, m);
-    file.write_rows<double>("connectors/state/adam_v", d, rows, v);
+    file.write_rows<double>(sg + "params", d, rows, p);
+    file.write_rows<double>(sg + "adam_m", d, rows, m);
+    file.write_rows<double>(sg + "adam_v", d, rows, v);
   };
 
   sim::Simulator sim;
-  std::vector<double> flat_params;  // all connectors' weights, broadcast each iteration
+  std::vector<double> flat_params;  // all slots' weights, broadcast each iteration
   auto compute = [&](const std::string& bytes) {
     const PairTask t = unpack<PairTask>(bytes);
-    const std::string& kind = kinds[t.connector / R];
-    const double k = collective::kind_is_weak(kind) ? C.weak_stiffness : C.strong_stiffness;
+    const ConnectorSlot& s = slots[t.connector];
     const std::vector<double> w(flat_params.begin() + static_cast<size_t>(t.connector) * Pc,
                                 flat_params.begin() + static_cast<size_t>(t.connector + 1) * Pc);
     const collective::PairOutcome o =
-        collective::run_pair(sim, agents[t.a], agents[t.b], w, k, "flat", C.episode_steps, true);
+        collective::run_pair(sim, agents[t.a], agents[t.b], w, s.stiffness, s.env, spec.episode_steps, true);
     PairDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad};
     return pack(d);
   };
@@ -159,22 +147,22 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
     if (rank == 0)
       for (const auto& p : params) flat_params.insert(flat_params.end(), p.begin(), p.end());
     bcast_doubles(comm, flat_params);
-    // this iteration's batches: uniform kinds use agent i with its clone, diverse kinds fresh random pairs
+    // this iteration's batches: uniform slots use agent i with its clone, diverse ones fresh random pairs
     std::vector<std::string> items;
-    std::vector<std::vector<std::pair<int, int>>> batch(N);
     for (int c = 0; c < N; ++c) {
-      if (collective::kind_is_diverse(kinds[c / R])) {
-        Rng rng = make_rng(cfg.run.seed, kConnectorsStage + c, it);
-        batch[c] = collective::random_pairs(rng, pop, B);
+      std::vector<std::pair<int, int>> batch;
+      if (slots[c].diverse) {
+        Rng rng = make_rng(cfg.run.seed, slots[c].stream, it);
+        batch = collective::random_pairs(rng, pop, B);
       } else {
-        batch[c] = collective::uniform_pairs(B);
+        batch = collective::uniform_pairs(B);
       }
       if (rank == 0)
-        for (const auto& [a, b] : batch[c]) items.push_back(pack(PairTask{c, a, b}));
+        for (const auto& [a, b] : batch) items.push_back(pack(PairTask{c, a, b}));
     }
     const FarmResult fr = farm(comm, items, compute);
 
-    // the master sums each connector's gradients in pair order and steps
+    // the master sums each slot's gradients in pair order and steps
     std::vector<double> curve_u(N, std::numeric_limits<double>::quiet_NaN()), curve_bl = curve_u, nan_pairs(N, 0);
     if (rank == 0) {
       for (int c = 0; c < N; ++c) {
@@ -203,19 +191,22 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
           collective::normalized_step(params[c], g, C.lr);
       }
     }
-    // curves: row `it` of each kind's (I × R) datasets
-    for (int k = 0; k < K; ++k) {
+    // curves: row `it` of each group's (I × columns) datasets
+    for (size_t gi = 0; gi < groups.size(); ++gi) {
       std::vector<int64_t> rows;
-      std::vector<double> u, b, n;
+      std::vector<double> u(columns[gi], NAN), b(columns[gi], NAN), n(columns[gi], NAN);
       if (rank == 0) {
         rows.push_back(it);
-        for (int r = 0; r < R; ++r) u.push_back(curve_u[k * R + r]), b.push_back(curve_bl[k * R + r]),
-                                      n.push_back(nan_pairs[k * R + r]);
+        for (int c = 0; c < N; ++c)
+          if (slots[c].group == groups[gi])
+            u[slots[c].column] = curve_u[c], b[slots[c].column] = curve_bl[c], n[slots[c].column] = nan_pairs[c];
+      } else {
+        u.clear(), b.clear(), n.clear();
       }
-      const Dims d = {static_cast<hsize_t>(I), static_cast<hsize_t>(R)};
-      file.write_rows<double>("connectors/" + kinds[k] + "/curve_u", d, rows, u);
-      file.write_rows<double>("connectors/" + kinds[k] + "/curve_bl", d, rows, b);
-      file.write_rows<double>("connectors/" + kinds[k] + "/nan_pairs", d, rows, n);
+      const Dims d = {static_cast<hsize_t>(I), static_cast<hsize_t>(columns[gi])};
+      file.write_rows<double>(groups[gi] + "/curve_u", d, rows, u);
+      file.write_rows<double>(groups[gi] + "/curve_bl", d, rows, b);
+      file.write_rows<double>(groups[gi] + "/nan_pairs", d, rows, n);
     }
     if ((it + 1) % cfg.output.checkpoint_every == 0 || it + 1 == I) {
       write_state();
@@ -225,27 +216,76 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
     if (rank == 0) {
       const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
-      std::printf("connectors: iteration %d/%d:", it + 1, I);
-      for (int k = 0; k < K; ++k) {
+      std::printf("%s: iteration %d/%d:", spec.label.c_str(), it + 1, I);
+      for (size_t gi = 0; gi < groups.size() && gi < 6; ++gi) {
         double m = 0;
-        for (int r = 0; r < R; ++r) m += curve_bl[k * R + r] / R;
-        std::printf(" %s %.3f", kinds[k].c_str(), m);
+        int k = 0;
+        for (int c = 0; c < N; ++c)
+          if (slots[c].group == groups[gi] && std::isfinite(curve_bl[c])) m += curve_bl[c], ++k;
+        std::printf(" %s %.3f", groups[gi].substr(groups[gi].rfind('/') + 1).c_str(), k ? m / k : NAN);
       }
+      if (groups.size() > 6) std::printf(" ...");
       std::printf(" BL; %.0f pair-episodes/s, %.0f s, ETA %.0f s\n", N * B / dt, el, (I - it - 1) * dt);
       std::fflush(stdout);
     }
   }
+  if (rank == 0 && done >= I) std::printf("%s: all %d iterations were already done\n", spec.label.c_str(), I);
 
-  // the trained weights per kind
-  if (rank == 0 && done >= I) std::printf("connectors: all %d iterations were already done\n", I);
-  for (int k = 0; k < K; ++k) {
+  // the trained weights per group (row = column of the slot)
+  for (size_t gi = 0; gi < groups.size(); ++gi) {
     std::vector<int64_t> rows;
     std::vector<double> w;
     if (rank == 0)
-      for (int r = 0; r < R; ++r) rows.push_back(r), w.insert(w.end(), params[k * R + r].begin(), params[k * R + r].end());
-    file.write_rows<double>("connectors/" + kinds[k] + "/params", {static_cast<hsize_t>(R), static_cast<hsize_t>(Pc)},
+      for (int c = 0; c < N; ++c)
+        if (slots[c].group == groups[gi]) rows.push_back(slots[c].column), w.insert(w.end(), params[c].begin(), params[c].end());
+    file.write_rows<double>(groups[gi] + "/params", {static_cast<hsize_t>(columns[gi]), static_cast<hsize_t>(Pc)},
                             rows, w);
   }
+  // every rank gets the trained weights
+  for (auto& p : params) {
+    p.resize(Pc);
+    MPI_Bcast(p.data(), Pc, MPI_DOUBLE, 0, comm);
+  }
+  return params;
+}
+
+void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                          const std::function<void()>& checkpoint) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const auto& C = cfg.connectors;
+  const std::vector<std::string>& kinds = C.kinds;
+  const int K = static_cast<int>(kinds.size()), R = C.replicates;
+  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const int pop = static_cast<int>(agents.size());
+
+  if (!file.has("connectors")) file.create_group("connectors");
+  io::h5::Node stage = file.group("connectors");
+  stage.write_string("status", "running");
+  std::string kind_list;
+  for (const auto& k : kinds) kind_list += (kind_list.empty() ? "" : ",") + k;
+  stage.write_string("kinds", kind_list);
+  stage.write_int("replicates", R);
+  if (!file.has("connectors/anchors")) {
+    std::vector<int64_t> rows;
+    std::vector<int32_t> an;
+    if (rank == 0)
+      for (int i = 0; i < pop; ++i) {
+        rows.push_back(i);
+        const auto& x = agents[i].anchors;
+        an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
+      }
+    file.write_rows<int32_t>("connectors/anchors", {static_cast<hsize_t>(pop), 4}, rows, an);
+  }
+  // connector c = kind·R + replicate, trained on flat
+  std::vector<ConnectorSlot> slots;
+  for (int k = 0; k < K; ++k)
+    for (int r = 0; r < R; ++r)
+      slots.push_back({collective::kind_is_weak(kinds[k]) ? C.weak_stiffness : C.strong_stiffness,
+                       collective::kind_is_diverse(kinds[k]), "flat", kConnectorsStage + k * R + r,
+                       "connectors/" + kinds[k], r});
+  TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
+  train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
   stage.write_string("status", "complete");
   checkpoint();
 }

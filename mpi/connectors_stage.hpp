@@ -28,6 +28,31 @@ inline constexpr uint64_t kConnectorsStage = 2000;
 // the final agent population of the run file on every rank, with anchors computed (deterministically)
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file);
 
+// one connector being trained: its springs' stiffness, its batches (uniform: agent i with its clone;
+// diverse: fresh random pairs each iteration from its stream), its training environment, and where its
+// curves and weights go (row/column `column` of `group`'s datasets)
+struct ConnectorSlot {
+  double stiffness = 0;
+  bool diverse = false;
+  std::string env = "flat";
+  uint64_t stream = 0;  // random stream of its initial weights (item 1000000) and batches (item = iteration)
+  std::string group;
+  int column = 0;
+};
+struct TrainSpec {
+  std::string state_group;  // holds state/{params, adam_m, adam_v} and the attribute iterations_done
+  std::string label;        // progress lines
+  int iterations = 0, batch_pairs = 0, episode_steps = 0;
+};
+
+// trains every slot in lock-step over the task farm (optimizer settings from cfg.connectors), resuming
+// from the state group's checkpointed state; writes curves per iteration and <group>/params at the end;
+// returns the trained weights on every rank
+std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                                                  const std::vector<collective::Agent>& agents,
+                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
+                                                  const std::function<void()>& checkpoint);
+
 void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                           const std::function<void()>& checkpoint);
 

@@ -69,6 +69,10 @@ int main(int argc, char** argv) {
     cmd->add_flag("--resume", a->resume, "continue the run file if it exists (else start it)");
     cmd->add_flag("--force", a->force, "overwrite an existing run file");
   }
+  r->add_option("--from", run.from,
+                "rerun this stage and the later ones on a copy of --base's earlier stages (written to --out)")
+      ->check(CLI::IsMember({"connectors", "deploy", "specialists", "scaling", "graded"}));
+  r->add_option("--base", run.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
   evo.agents_only = true;
 
   // a mistyped command is named, with the list of commands

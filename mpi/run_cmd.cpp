@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <algorithm>
 #include <set>
 
 #include "common/check.hpp"
@@ -16,6 +17,7 @@
 #include "mpi/checkpoint.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
+#include "mpi/later_stages.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -32,6 +34,52 @@ struct MpiSession {
   MpiSession(int argc, char** argv) { MPI_Init(&argc, &argv); }
   ~MpiSession() { MPI_Finalize(); }
 };
+
+// the sections whose keys decide what a stage computes (beside run.seed, which every stage uses)
+std::vector<std::string> sections_before(const std::string& stage) {
+  std::vector<std::string> out;
+  for (const std::string& s : io::stage_names()) {
+    if (s == stage) break;
+    out.push_back(s);
+  }
+  return out;
+}
+
+// --from: the keys of the stages before `from` (and run.seed) must be the base's; returns the differences
+std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
+  const auto a = io::flat(base), b = io::flat(now);
+  const auto secs = sections_before(from);
+  std::string diff;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
+    const bool bound = a[i].first == "run.seed" || std::find(secs.begin(), secs.end(), sec) != secs.end();
+    if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+  }
+  return diff;
+}
+
+// rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
+void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
+                     const std::string& toml) {
+  namespace fs = std::filesystem;
+  const std::string tmp = path + ".new";
+  fs::copy_file(base, tmp, fs::copy_options::overwrite_existing);
+  {
+    io::h5::File f = io::h5::File::open(tmp, true);
+    bool later = false;
+    for (const std::string& s : io::stage_names()) {
+      later = later || s == from;
+      if (later && f.has(s)) DIVCOLL_THROW_UNLESS(H5Ldelete(f.id(), s.c_str(), H5P_DEFAULT) >= 0, "cannot drop " << s);
+    }
+    for (const char* a : {"end_time", "resumed", "config"})
+      if (f.has_attribute(a)) H5Adelete(f.id(), a);
+    f.write_string("config", toml);
+    f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
+    f.close();
+  }
+  fs::remove(checkpoint_path(path));
+  fs::rename(tmp, path);
+}
 
 }  // namespace
 
@@ -50,6 +98,25 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     cfg = io::load_config(args.config, args.overrides);
     path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
     DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
+    DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
+    DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
+                         "--from starts a new run file; to continue one that was interrupted, use --resume alone");
+    if (!args.from.empty()) {
+      DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
+                           "--from writes a new run file: give an --out other than --base " << args.base);
+      std::string why;
+      DIVCOLL_THROW_UNLESS(valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
+      io::h5::File f = io::h5::File::open(args.base);
+      const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
+      const std::string diff = incompatible_keys(before, cfg, args.from);
+      if (!diff.empty())
+        throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
+                               << ", so their keys must be the same:" << diff);
+      for (const std::string& s : sections_before(args.from))
+        if (io::stage_enabled(cfg, s))
+          DIVCOLL_THROW_UNLESS(f.has(s) && f.group(s).has_attribute("status") && f.group(s).read_string("status") == "complete",
+                               "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
+    }
     if (fs::exists(path) && !args.resume && !args.force)
       throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
     const fs::path parent = fs::absolute(path).parent_path();
@@ -60,7 +127,22 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     // a run resumes only with the config it started with (checked read-only, before anything is opened
     // for writing; rank 0 reads, every rank gets the verdict)
     existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
-    if (existing) {
+    if (!args.from.empty()) {
+      // a copy of the base's earlier stages is made now and continued like a resumed run
+      int ok = 1;
+      std::string err;
+      if (rank == 0) try {
+          derive_run_file(args.base, path, args.from, io::to_toml(cfg));
+        } catch (const std::exception& e) {
+          ok = 0;
+          err = e.what();
+        }
+      MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+      if (!ok) throw InputError(msg() << "cannot make " << path << " from " << args.base << ": " << err);
+      if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", path.c_str(), args.base.c_str(), args.from.c_str());
+      existing = true;
+    }
+    if (existing && args.from.empty()) {
       std::string diff;
       if (rank == 0) {
         io::h5::File f = io::h5::File::open(path);
@@ -127,29 +209,27 @@ int run_main(int argc, char** argv, const RunArgs& args) {
                   args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
                   path.c_str());
 
-    const auto t0 = std::chrono::steady_clock::now();
-    if (io::stage_enabled(cfg, "agents") || args.agents_only) {
-      run_agents_stage(MPI_COMM_WORLD, cfg, file, ckpt);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      file.group("agents").write_double("wall_s_last_session", wall);
-    }
-    if (!args.agents_only && io::stage_enabled(cfg, "connectors")) {
+    using StageFn = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
+    const std::vector<std::pair<std::string, StageFn>> stages = {
+        {"agents", run_agents_stage},           {"connectors", run_connectors_stage},
+        {"deploy", run_deploy_stage},           {"specialists", run_specialists_stage},
+        {"scaling", run_scaling_stage},         {"graded", run_graded_stage}};
+    for (const auto& [name, fn] : stages) {
+      if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
+      if (file.has(name) && file.group(name).has_attribute("status") &&
+          file.group(name).read_string("status") == "complete") {
+        if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
+        continue;
+      }
       const auto t1 = std::chrono::steady_clock::now();
-      run_connectors_stage(MPI_COMM_WORLD, cfg, file, ckpt);
+      fn(MPI_COMM_WORLD, cfg, file, ckpt);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      file.group("connectors").write_double("wall_s_last_session", wall);
+      io::h5::Node g = file.group(name);
+      g.write_double("wall_s_last_session", wall);
+      g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
+      if (rank == 0 && g.has_attribute("status") && g.read_string("status") == "complete")
+        std::printf("stage %s: done in %.1f s\n", name.c_str(), wall);
     }
-    if (!args.agents_only && io::stage_enabled(cfg, "deploy")) {
-      const auto t1 = std::chrono::steady_clock::now();
-      run_deploy_stage(MPI_COMM_WORLD, cfg, file, ckpt);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      file.group("deploy").write_double("wall_s_last_session", wall);
-    }
-    // the later stages land with their issues; say so rather than pretend
-    if (!args.agents_only)
-      for (const std::string& st : cfg.run.stages)
-        if (st != "agents" && st != "connectors" && st != "deploy" && rank == 0)
-          std::printf("stage %s: not implemented yet in this version; skipped\n", st.c_str());
     file.write_string("end_time", now_iso());
     file.close();
     remove_checkpoint(MPI_COMM_WORLD, path);

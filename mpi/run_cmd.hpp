@@ -15,6 +15,8 @@ struct RunArgs {
   bool resume = false;                 // continue the run file if it exists (else start it)
   bool force = false;                  // overwrite an existing run file
   bool agents_only = false;            // `evolve`: only the agents stage
+  std::string from;                    // --from STAGE: rerun STAGE and the later ones ...
+  std::string base;                    // ... on a copy of this run file's earlier stages
 };
 
 // initialises MPI, runs, finalises; returns the exit code (2: bad input, 1: failure)

@@ -43,6 +43,21 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
   return o;
 }
 
+PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
+                      double stiffness, const std::string& env, int steps) {
+  const sim::Scene s = chain_scene(agents, params, stiffness, env);
+  sim::RunOptions opt;
+  opt.steps = steps;
+  const sim::RunResult r = sim.run(s, opt);
+  double bl = 0;
+  for (const Agent* a : agents) bl += body_length(*a);
+  PairOutcome o;
+  o.status = r.status;
+  o.travel_u = r.travel;
+  o.travel_bl = r.travel / (bl / static_cast<double>(agents.size()));
+  return o;
+}
+
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps) {
   const sim::Scene s = agent_scene(a, env);
   sim::RunOptions opt;

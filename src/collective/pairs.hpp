@@ -37,6 +37,11 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& a
                      const std::vector<double>& params, double stiffness, const std::string& env, int steps,
                      bool grad);
 
+// a chain of agents in heap order (agent 0 front-most), one connector for all: travel of the whole chain's
+// centre of mass in u and in mean body lengths of its agents (no gradient)
+PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
+                      double stiffness, const std::string& env, int steps);
+
 // one agent alone: travel in u and BL
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps);
 

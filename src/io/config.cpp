@@ -168,6 +168,9 @@ const std::vector<Key>& schema() {
             DIVCOLL_FIELD(connectors.lr)),
         num("connectors", "clip_norm", T::Double, "1.0", "(0, 1e6]", "", "global gradient-norm clip",
             DIVCOLL_FIELD(connectors.clip_norm)),
+        num("connectors", "init_out_gain", T::Double, "0.1", "[0, 10]", "",
+            "initial weights of the connector's output layer ~ N(0, (gain·sqrt(2/(in+out)))²); 3 as the agent's, "
+            "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
         pick("connectors", "kinds", T::StringList, string_list(kKinds), kKinds, "connector kinds to train",
              DIVCOLL_FIELD(connectors.kinds)),
         // [deploy]
@@ -192,7 +195,7 @@ const std::vector<Key>& schema() {
         num("scaling", "sizes", T::IntList, "[5, 10, 20]", "[2, 1000]", "agents",
             "chain sizes N (binary tree in heap order)", DIVCOLL_FIELD(scaling.sizes)),
         num("scaling", "draws", T::Int, "100", "[1, 100000]", "chains",
-            "diverse chains per connector replicate and size", DIVCOLL_FIELD(scaling.draws)),
+            "chains per connector replicate, size and variant (uniform: clones of agent i < draws; diverse: random draws)", DIVCOLL_FIELD(scaling.draws)),
         num("scaling", "episode_steps", T::Int, "3000", "[1, 1e7]", "steps", "steps of one chain episode",
             DIVCOLL_FIELD(scaling.episode_steps)),
         // [graded]
@@ -621,6 +624,9 @@ void check_combinations(const RunConfig& c) {
       DIVCOLL_THROW_UNLESS(n <= a.population, "scaling.sizes has "
                                                   << n << " but agents.population = " << a.population
                                                   << ": a diverse chain needs N distinct agents");
+    DIVCOLL_THROW_UNLESS(c.scaling.draws <= a.population,
+                         "scaling.draws = " << c.scaling.draws << " is more than agents.population = " << a.population
+                                            << ": uniform chains are clones of agent i for i < draws");
     for (const char* kind : {"weak_uniform", "weak_diverse"})
       DIVCOLL_THROW_UNLESS(listed(kinds, kind), "run.stages has scaling, which uses "
                                                     << kind << " connectors, but connectors.kinds"
@@ -731,6 +737,8 @@ void validate(const RunConfig& cfg) {
       "against");
   check_combinations(c);
 }
+
+const std::vector<std::string>& stage_names() { return kStages; }
 
 bool stage_enabled(const RunConfig& cfg, const std::string& stage) {
   if (stage == "graded" && !cfg.graded.enabled) return false;

@@ -55,6 +55,7 @@ struct RunConfig {
     std::string optimizer;           // adam | normalized
     double lr{};                     // learning rate (Adam) or step (normalized)
     double clip_norm{};              // global gradient norm clip
+    double init_out_gain{};          // init gain of the connector network's output layer
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
     bool operator==(const Connectors&) const = default;
   };
@@ -118,6 +119,8 @@ void validate(const RunConfig& cfg);
 
 // whether a stage runs: listed in run.stages (and, for "graded", graded.enabled)
 bool stage_enabled(const RunConfig& cfg, const std::string& stage);
+// the pipeline's stages in the order they run: agents connectors deploy specialists scaling graded
+const std::vector<std::string>& stage_names();
 
 // the fully resolved config as TOML, every key with its doc as a comment; parses back to `cfg`
 std::string to_toml(const RunConfig& cfg);

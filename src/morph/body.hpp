@@ -123,6 +123,8 @@ inline constexpr std::array<double, 3> kConnectorInitGains = {2.0, 2.0, 3.0};
 // n_inputs → 32 → 32 → 21 (3509 values with 54 inputs)
 std::vector<double> init_agent_params(Rng& rng, int n_inputs = 54);
 // 11 → 32 → 32 → 1 (1473 values)
-std::vector<double> init_connector_params(Rng& rng);
+// out_gain: the gain of the output layer (the first two keep 2, 2); 3 = the agent's; a small gain starts the
+// connector nearly passive (config connectors.init_out_gain)
+std::vector<double> init_connector_params(Rng& rng, double out_gain = kConnectorInitGains[2]);
 
 }  // namespace divcoll::morph

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -149,7 +150,7 @@ TEST_F(Cli, ExistingRunFileIsNeitherOverwrittenNorResumedWithAnotherConfig) {
   // the finished run resumes to itself
   const Exec same = run("evolve " + cfg + " --out " + path("r.h5") + " --resume");
   EXPECT_EQ(same.code, 0) << same.out;
-  EXPECT_NE(same.out.find("already done"), std::string::npos) << same.out;
+  EXPECT_NE(same.out.find("stage agents: complete in the run file"), std::string::npos) << same.out;
 }
 
 }  // namespace
@@ -161,7 +162,7 @@ namespace {
 // the stages write the datasets they promise, with the shapes the README gives
 TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
-  const Exec r = run("run " + cfg + " run.stages=agents,connectors,deploy --out " + path("run.h5"));
+  const Exec r = run("run " + cfg + " run.stages=agents,connectors,deploy,specialists,scaling --out " + path("run.h5"));
   ASSERT_EQ(r.code, 0) << r.out;
   const io::h5::File f = io::h5::File::open(path("run.h5"));
   using D = io::h5::Dims;
@@ -198,7 +199,58 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   for (size_t q = 0; q < st.size(); ++q) EXPECT_EQ(std::isfinite(tr[q]), st[q] == 0) << "episode " << q;
   const auto pairs = f.read<int32_t>("deploy/diverse_pairs", D{NP, 2});
   for (hsize_t q = 0; q < NP; ++q) EXPECT_NE(pairs[2 * q], pairs[2 * q + 1]) << "a diverse pair is two agents";
+  // specialists: one weak diverse connector per novel environment, deployed there
+  const hsize_t EN = E - 1, RS = 1, IS = 2;
+  EXPECT_EQ(f.group("specialists").read_string("status"), "complete");
+  EXPECT_EQ(f.group("specialists").read_string("environments"), "step_up,gap,ice");
+  for (const char* env : {"step_up", "gap", "ice"}) {
+    const std::string g = std::string("specialists/") + env;
+    EXPECT_EQ(f.dims(g + "/params"), (D{RS, Pc})) << env;
+    for (double c : f.read<double>(g + "/curve_bl", D{IS, RS})) EXPECT_TRUE(std::isfinite(c)) << env;
+  }
+  EXPECT_EQ(f.dims("specialists/travel_bl"), (D{EN, RS, NP}));
+  const auto sst = f.read<uint8_t>("specialists/status");
+  const auto stb = f.read<double>("specialists/travel_bl");
+  for (size_t q = 0; q < sst.size(); ++q) EXPECT_EQ(std::isfinite(stb[q]), sst[q] == 0) << "specialist episode " << q;
+  // specialists differ from the flat-trained weak diverse connector (they trained elsewhere)
+  EXPECT_NE(f.read<double>("specialists/ice/params"), f.read<double>("connectors/weak_diverse/params"));
+  // scaling: chains of 2 and 3, uniform and diverse, every environment
+  const hsize_t S = 2, DR = 2;
+  EXPECT_EQ(f.group("scaling").read_string("status"), "complete");
+  EXPECT_EQ(f.read<int64_t>("scaling/sizes"), (std::vector<int64_t>{2, 3}));
+  EXPECT_EQ(f.dims("scaling/travel_bl"), (D{E, S, 2, R, DR}));
+  for (hsize_t n : {2, 3}) {
+    const auto ag = f.read<int32_t>("scaling/n" + std::to_string(n) + "/diverse_agents", D{R * DR, n});
+    for (hsize_t c = 0; c < R * DR; ++c) {
+      std::set<int32_t> distinct(ag.begin() + c * n, ag.begin() + (c + 1) * n);
+      EXPECT_EQ(distinct.size(), n) << "a diverse chain is N different agents";
+      for (int32_t a : distinct) EXPECT_TRUE(a >= 0 && a < static_cast<int32_t>(P));
+    }
+  }
+  const auto cst = f.read<uint8_t>("scaling/status");
+  const auto ctb = f.read<double>("scaling/travel_bl");
+  for (size_t q = 0; q < cst.size(); ++q) EXPECT_EQ(std::isfinite(ctb[q]), cst[q] == 0) << "chain episode " << q;
   EXPECT_FALSE(fs::exists(path("run.h5.ckpt"))) << "the checkpoint is removed when the run completes";
+
+  // --from deploy: a new run file with the base's agents and connectors, deploy rerun with new keys
+  const Exec bad = run("run " + cfg + " run.stages=agents,connectors,deploy agents.epochs=3 --from deploy --base " +
+                       path("run.h5") + " --out " + path("re.h5"));
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("agents.epochs"), std::string::npos) << bad.out;
+  EXPECT_FALSE(fs::exists(path("re.h5")));
+  const Exec same_out = run("run " + cfg + " --from deploy --base " + path("run.h5") + " --out " + path("run.h5"));
+  EXPECT_EQ(same_out.code, 2) << same_out.out;
+  const Exec re = run("run " + cfg + " run.stages=agents,connectors,deploy deploy.episode_steps=100 --from deploy --base " +
+                      path("run.h5") + " --out " + path("re.h5"));
+  ASSERT_EQ(re.code, 0) << re.out;
+  const io::h5::File g = io::h5::File::open(path("re.h5"));
+  EXPECT_EQ(g.read<double>("agents/final/params"), f.read<double>("agents/final/params"));
+  EXPECT_EQ(g.read<double>("connectors/weak_diverse/params"), f.read<double>("connectors/weak_diverse/params"));
+  EXPECT_EQ(g.dims("deploy/collectives/travel_bl"), (D{E, T, R, NP}));
+  EXPECT_NE(g.read<double>("deploy/agents/travel_u"), f.read<double>("deploy/agents/travel_u"))
+      << "deploy reran with 100 steps instead of 200";
+  EXPECT_FALSE(g.has("specialists")) << "stages from --from on are dropped from the copy";
+  EXPECT_NE(g.read_string("derived_from").find("run.h5"), std::string::npos);
 }
 
 }  // namespace

@@ -133,6 +133,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.optimizer",
                                              "connectors.lr",
                                              "connectors.clip_norm",
+                                             "connectors.init_out_gain",
                                              "connectors.kinds",
                                              "deploy.episode_steps",
                                              "deploy.pairs",
@@ -311,7 +312,7 @@ TEST(ConfigOverrides, ApplyWithTheSameChecks) {
       {"agents.population=12", "run.name=demo", "deploy.environments=flat, ice", "scaling.sizes=3,5",
        "agents.gd_rule=adam", "run.seed = 7", "agents.gd_step=0.5",
        "connectors.kinds=[\"weak_uniform\", \"weak_diverse\"]", "run.name=\"quoted\"",
-       "connectors.batch_pairs=8", "deploy.pairs=8", "agents.rest_moves=false", "output.dir=out/runs"});
+       "connectors.batch_pairs=8", "deploy.pairs=8", "scaling.draws=4", "agents.rest_moves=false", "output.dir=out/runs"});
   EXPECT_EQ(c.agents.population, 12);  // the override wins over the file
   EXPECT_EQ(c.run.name, "quoted");     // the later override wins
   EXPECT_EQ(c.deploy.environments, (std::vector<std::string>{"flat", "ice"}));

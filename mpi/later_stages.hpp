@@ -1,0 +1,34 @@
+// the stages after deployment (SPEC §7.3–7.5): specialists, scaling chains, graded diversity
+#pragma once
+
+#include <mpi.h>
+
+#include <functional>
+
+#include "io/config.hpp"
+#include "io/h5.hpp"
+
+namespace divcoll::mpi {
+
+inline constexpr uint64_t kSpecialistsStage = 4000;
+inline constexpr uint64_t kScalingStage = 5000;
+
+// Run file, group /specialists (attributes status, environments = the novel ones, replicates):
+//   <env>/params (R × P_c), <env>/curve_u, curve_bl, nan_pairs (I × R)   as in /connectors
+//   state/*                                                             the optimizer state
+//   travel_bl, travel_u, status  (novel envs × R × deploy.pairs)  each specialist in its environment on
+//                                                                 the deployment stage's diverse pairs
+// group /scaling (attributes status, environments, variants = uniform,diverse, envs_done):
+//   sizes (S)                     chain sizes N
+//   n<N>/diverse_agents           (R·draws × N) the agents of each diverse chain, heap order
+//   travel_bl, travel_u, status   (E × S × 2 × R × draws); variant 0: N clones of agent `draw` with a weak
+//                                 uniform-trained connector; 1: the diverse chain with a weak diverse-trained one
+
+void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                           const std::function<void()>& checkpoint);
+void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                       const std::function<void()>& checkpoint);
+void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint);
+
+}  // namespace divcoll::mpi
