@@ -32,6 +32,22 @@ int main(int argc, char** argv) {
   c->add_flag("--uniform", sc.uniform, "clones of one agent instead of different agents");
   c->add_flag("--force", sc.force, "overwrite an existing output file");
 
+  cli::ExportArgs ex;
+  auto* x = app.add_subcommand("export", "write the scene file of one episode of a run file (then `simulate` it)");
+  x->add_option("run", ex.run, "run file")->required()->check(CLI::ExistingFile);
+  x->add_option("--what", ex.what, "alone (deploy), pair (deploy), specialist or chain (scaling)")
+      ->check(CLI::IsMember({"alone", "pair", "specialist", "chain"}));
+  x->add_option("--env", ex.env, "environment of the episode");
+  x->add_option("--agent", ex.agent, "agent index (alone)");
+  x->add_option("--type", ex.type, "collective type KIND@DEPLOYMENT, e.g. weak_uniform@diverse (pair)");
+  x->add_option("--replicate", ex.replicate, "connector replicate (pair, specialist, chain)");
+  x->add_option("--pair", ex.pair, "pair index (pair, specialist)");
+  x->add_option("--size", ex.size, "chain size N (chain)");
+  x->add_option("--variant", ex.variant, "uniform or diverse (chain)")->check(CLI::IsMember({"uniform", "diverse"}));
+  x->add_option("--draw", ex.draw, "chain index within its replicate (chain)");
+  x->add_option("--out", ex.out, "scene file to write")->required();
+  x->add_flag("--force", ex.force, "overwrite an existing output file");
+
   cli::DemoArgs demo;
   auto* d = app.add_subcommand("demo", "a pair on flat ground and in a novel environment, travel in body lengths");
   d->add_option("--out", demo.out, "output folder");
@@ -97,6 +113,7 @@ int main(int argc, char** argv) {
     if (*s) return cli::simulate(sim);
     if (*c) return cli::scene(sc);
     if (*d) return cli::demo(demo);
+    if (*x) return cli::export_scene(ex);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*g) return cli::gd_compare(gdc);

@@ -26,6 +26,14 @@ struct SceneArgs {
 };
 int scene(const SceneArgs& a);
 
+// divcoll export RUN.h5 --what alone|pair|specialist|chain ... --out S.h5: the scene of one stored episode
+struct ExportArgs {
+  std::string run, out, what = "pair", env = "flat", type = "weak_diverse@diverse", variant = "diverse";
+  int agent = 0, replicate = 0, pair = 0, size = 5, draw = 0;
+  bool force = false;
+};
+int export_scene(const ExportArgs& a);
+
 // divcoll demo --out DIR: a pair on flat and in a novel environment, simulated, travel in body lengths
 struct DemoArgs {
   std::string out = "out/demo", env = "step_up";

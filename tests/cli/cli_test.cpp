@@ -232,6 +232,32 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   for (size_t q = 0; q < cst.size(); ++q) EXPECT_EQ(std::isfinite(ctb[q]), cst[q] == 0) << "chain episode " << q;
   EXPECT_FALSE(fs::exists(path("run.h5.ckpt"))) << "the checkpoint is removed when the run completes";
 
+  // export: the scene of a stored episode simulates to the stored travel, bit for bit
+  struct Case {
+    std::string args, dataset;
+    size_t index;
+    int steps;
+  };
+  const std::vector<Case> cases = {
+      {"--what alone --env gap --agent 3", "deploy/agents/travel_u", 2 * P + 3, 200},
+      {"--what pair --env ice --type strong_uniform@diverse --pair 2", "deploy/collectives/travel_u",
+       ((3 * T + 5) * R + 0) * NP + 2, 200},
+      {"--what specialist --env step_up --pair 1", "specialists/travel_u", 1, 200},
+      {"--what chain --env gap --size 3 --variant diverse --draw 1", "scaling/travel_u",
+       (((2 * S + 1) * 2 + 1) * R + 0) * DR + 1, 200}};
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string scene = path("ex" + std::to_string(c) + ".h5"), traj = path("tr" + std::to_string(c) + ".h5");
+    const Exec e = run("export " + path("run.h5") + " " + cases[c].args + " --out " + scene);
+    ASSERT_EQ(e.code, 0) << cases[c].args << "\n" << e.out;
+    const Exec sim = run("simulate --scene " + scene + " --steps " + std::to_string(cases[c].steps) + " --out " + traj);
+    ASSERT_EQ(sim.code, 0) << sim.out;
+    const double stored = f.read<double>(cases[c].dataset)[cases[c].index];
+    EXPECT_EQ(io::h5::File::open(traj).read_double("travel"), stored) << cases[c].args;
+  }
+  const Exec nope = run("export " + path("run.h5") + " --what pair --env moon --out " + path("x.h5"));
+  EXPECT_EQ(nope.code, 2);
+  EXPECT_NE(nope.out.find("'moon' is not in the run file"), std::string::npos) << nope.out;
+
   // --from deploy: a new run file with the base's agents and connectors, deploy rerun with new keys
   const Exec bad = run("run " + cfg + " run.stages=agents,connectors,deploy agents.epochs=3 --from deploy --base " +
                        path("run.h5") + " --out " + path("re.h5"));
