@@ -134,10 +134,10 @@ std::vector<evo::Individual> read_pool(const io::h5::Node& file, const std::stri
   return out;
 }
 
-std::string gen_name(int g) {
+std::string gen_name(const std::string& group, int g) {
   char b[32];
-  std::snprintf(b, sizeof b, "agents/gen_%03d", g);
-  return b;
+  std::snprintf(b, sizeof b, "/gen_%03d", g);
+  return group + b;
 }
 
 struct Summary {
@@ -162,13 +162,21 @@ Summary summarize(const std::vector<evo::Individual>& pop) {
 
 }  // namespace
 
-std::vector<evo::Individual> read_final_population(const io::h5::Node& file) {
-  DIVCOLL_THROW_UNLESS(file.has("agents/final"), file.file() << " has no agents/final: its agents stage has not finished");
-  return read_pool(file, "agents/final", nullptr);
+std::vector<evo::Individual> read_final_population(const io::h5::Node& file, const std::string& group) {
+  DIVCOLL_THROW_UNLESS(file.has(group + "/final"),
+                       file.file() << " has no " << group << "/final: its agents stage has not finished");
+  return read_pool(file, group + "/final", nullptr);
 }
 
 void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint) {
+  run_agents_stage(comm, cfg, file, checkpoint, AgentsSpec{});
+}
+
+void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint, const AgentsSpec& spec) {
+  const std::string& G = spec.group;
+  const char* label = spec.label.c_str();
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -193,17 +201,17 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   mut.rest_moves = A.rest_moves;
 
   // where to start: after the last complete generation in the file
-  int64_t done = file.has("agents") && file.group("agents").has_attribute("generations_done")
-                     ? file.group("agents").read_int("generations_done")
+  int64_t done = file.has(G) && file.group(G).has_attribute("generations_done")
+                     ? file.group(G).read_int("generations_done")
                      : 0;
   if (done == 0) {
-    if (!file.has("agents")) file.create_group("agents");
+    if (!file.has(G)) file.create_group(G);
   }
   // a generation that was being written when the run stopped is dropped and redone
   for (int g = static_cast<int>(done); g <= A.generations + 1; ++g)
-    if (file.has(gen_name(g))) H5Ldelete(file.id(), gen_name(g).c_str(), H5P_DEFAULT);
-  if (file.has("agents/final") && done < A.generations + 1) H5Ldelete(file.id(), "agents/final", H5P_DEFAULT);
-  io::h5::Node stage = file.group("agents");
+    if (file.has(gen_name(G, g))) H5Ldelete(file.id(), gen_name(G, g).c_str(), H5P_DEFAULT);
+  if (file.has(G + "/final") && done < A.generations + 1) H5Ldelete(file.id(), (G + "/final").c_str(), H5P_DEFAULT);
+  io::h5::Node stage = file.group(G);
   stage.write_string("status", "running");
   stage.write_int("population", P);
 
@@ -211,7 +219,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   std::vector<evo::Individual> population;
   if (done > 0 && rank == 0) {
     std::vector<uint8_t> survived;
-    const auto pool = read_pool(file, gen_name(static_cast<int>(done) - 1), &survived);
+    const auto pool = read_pool(file, gen_name(G, static_cast<int>(done) - 1), &survived);
     for (size_t i = 0; i < pool.size(); ++i)
       if (survived[i]) population.push_back(pool[i]);
     DIVCOLL_THROW_UNLESS(static_cast<int>(population.size()) == P,
@@ -219,9 +227,9 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
                                      << " survivors, not agents.population = " << P
                                      << " (was the run started with another config?)");
     if (done > A.generations)
-      std::printf("agents: all generations were already done; checking the final population\n");
+      std::printf("%s: all generations were already done; checking the final population\n", label);
     else
-      std::printf("agents: resuming after generation %lld\n", static_cast<long long>(done - 1));
+      std::printf("%s: resuming after generation %lld\n", label, static_cast<long long>(done - 1));
   }
 
   // the work item: train one agent (created or mutated on the master)
@@ -229,7 +237,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   auto train = [&](const std::string& bytes) {
     evo::Individual x = unpack<evo::Individual>(bytes);
     x.train = evo::train_agent(x.agent, gd, sim);
-    x.descriptor = evo::agent_descriptor(x.agent);
+    x.descriptor = spec.spring_descriptor ? evo::spring_layout_descriptor(x.agent) : evo::agent_descriptor(x.agent);
     return pack(x);
   };
   const auto t_stage = std::chrono::steady_clock::now();
@@ -240,10 +248,12 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     std::vector<std::string> tasks;
     if (rank == 0) {
       for (int i = 0; i < P; ++i) {
-        Rng rng = make_rng(cfg.run.seed, kAgentsStage + g, i);
+        Rng rng = make_rng(cfg.run.seed, spec.stream + g, i);
         evo::Individual x;
         if (g == 0) {
-          x.agent = collective::random_agent(rng);
+          x.agent = spec.fixed_cells ? collective::make_agent(spec.fixed_cells,
+                                                              spec.fixed_springs ? spec.fixed_springs : morph::random_springs(rng), rng)
+                                     : collective::random_agent(rng);
           x.id = i;
         } else {
           x.agent = evo::make_offspring(population[i].agent, rng, mut, gd);
@@ -259,7 +269,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
       if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
         last_print = now;
-        std::printf("agents: generation %d/%d, trained %d/%d, %.1f s\n", g, A.generations, k, n, now);
+        std::printf("%s: generation %d/%d, trained %d/%d, %.1f s\n", label, g, A.generations, k, n, now);
         std::fflush(stdout);
       }
     };
@@ -286,7 +296,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       for (size_t i = 0; i < pool.size(); ++i) rows[i].uniqueness = uniq[i];
       population = std::move(next);
     }
-    write_pool(comm, file, gen_name(g), rows, owner, rank, A.epochs);
+    write_pool(comm, file, gen_name(G, g), rows, owner, rank, A.epochs);
     stage.write_int("generations_done", g + 1);
     if ((g + 1) % cfg.output.checkpoint_every == 0) checkpoint();
 
@@ -295,7 +305,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
       const int left = A.generations - g;
-      std::printf("agents: generation %d/%d done: best %.3f BL, mean %.3f BL%s, %.1f agents/s, %.1f s, ETA %.0f s\n", g,
+      std::printf("%s: generation %d/%d done: best %.3f BL, mean %.3f BL%s, %.1f agents/s, %.1f s, ETA %.0f s\n", label, g,
                   A.generations, s.best, s.mean, s.failed ? " (some failed)" : "", P / dt, el,
                   left * dt);
       std::fflush(stdout);
@@ -314,14 +324,14 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     static const evo::Individual empty;
     for (auto& r : rows) r.ind = &empty;
   }
-  if (!file.has("agents/final")) {
+  if (!file.has(G + "/final")) {
     if (rank == 0) {
       std::vector<double> uniq;
       std::vector<evo::Individual> pop = population;
       evo::select_survivors(pop, P, A.uniqueness_k, &uniq, A.selection == "rank");
       for (int i = 0; i < P; ++i) rows[i].uniqueness = uniq[i];
     }
-    write_pool(comm, file, "agents/final", rows, owner, rank, A.epochs);
+    write_pool(comm, file, G + "/final", rows, owner, rank, A.epochs);
   }
   stage.write_int("generations_done", A.generations + 1);
   stage.write_string("status", "complete");

@@ -31,12 +31,24 @@ namespace divcoll::mpi {
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
 inline constexpr uint64_t kAgentsStage = 1000;
 
+// where and how a population is evolved: the main one (defaults) or a graded-diversity one (SPEC §7.5)
+struct AgentsSpec {
+  std::string group = "agents";        // run-file group of the generations and the final population
+  std::string label = "agents";        // progress lines
+  uint64_t stream = kAgentsStage;      // random stream of generation g: stream + g
+  uint32_t fixed_cells = 0;            // generation 0 takes this body (0: random bodies)
+  uint32_t fixed_springs = 0;          // ... and these springs (0: random springs)
+  bool spring_descriptor = false;      // uniqueness on the spring-dependent descriptor entries
+};
+void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint, const AgentsSpec& spec);
+
 // runs (or resumes) the stage on `comm`; rank 0 prints progress. Every rank calls it. `checkpoint` is
 // called (collectively) after every output.checkpoint_every generations and at the end of the stage.
 void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint);
 
 // the final population of a run file's agents stage (rank-local read)
-std::vector<evo::Individual> read_final_population(const io::h5::Node& file);
+std::vector<evo::Individual> read_final_population(const io::h5::Node& file, const std::string& group = "agents");
 
 }  // namespace divcoll::mpi

@@ -46,13 +46,13 @@ void bcast_doubles(MPI_Comm comm, std::vector<double>& v) {
 
 }  // namespace
 
-std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file) {
+std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file, const std::string& group) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::string bytes;
   if (rank == 0) {
     std::vector<collective::Agent> agents;
-    for (const evo::Individual& x : read_final_population(file)) agents.push_back(x.agent);
+    for (const evo::Individual& x : read_final_population(file, group)) agents.push_back(x.agent);
     bytes = pack(agents);
   }
   int64_t n = static_cast<int64_t>(bytes.size());

@@ -26,7 +26,8 @@ namespace divcoll::mpi {
 inline constexpr uint64_t kConnectorsStage = 2000;
 
 // the final agent population of the run file on every rank, with anchors computed (deterministically)
-std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file);
+std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file,
+                                               const std::string& group = "agents");
 
 // one connector being trained: its springs' stiffness, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its

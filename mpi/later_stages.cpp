@@ -3,10 +3,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numeric>
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "mpi/agents_stage.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
 #include "mpi/protocol.hpp"
@@ -83,7 +85,8 @@ std::vector<EpisodeDone> run_episodes(MPI_Comm comm, const std::vector<GroupEpis
     std::vector<const collective::Agent*> ptr;
     for (int32_t a : e.agents) ptr.push_back(&agents[a]);
     const collective::PairOutcome o =
-        !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], stiffness, envs[e.env], steps, false)
+        ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
+        : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], stiffness, envs[e.env], steps, false)
                         : collective::run_chain(sim, ptr, weights[e.weights], stiffness, envs[e.env], steps);
     return pack(EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)});
   };
@@ -260,12 +263,138 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
   checkpoint();
 }
 
-void run_graded_stage(MPI_Comm comm, const io::RunConfig&, io::h5::File& file, const std::function<void()>&) {
+void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                      const std::function<void()>& checkpoint) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
+  const std::vector<std::string>& envs = cfg.deploy.environments;
+  const int E = static_cast<int>(envs.size()), R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
+  const int GP = cfg.graded.population;
   if (!file.has("graded")) file.create_group("graded");
-  file.group("graded").write_string("status", "not implemented in this version");
-  if (rank == 0) std::printf("stage graded: not implemented yet in this version; skipped\n");
+  io::h5::Node stage = file.group("graded");
+  stage.write_string("status", "running");
+  stage.write_string("environments", join(envs));
+  stage.write_string("populations", "same_shape,same_shape_springs");
+
+  // the most common body of the main population (ties: the lowest genotype), and the most common spring
+  // genotype among its agents of that body
+  uint32_t shape = 0, springs = 0;
+  {
+    const auto main = read_final_population(file);
+    std::map<uint32_t, int> bodies;
+    for (const auto& x : main) ++bodies[x.agent.cells];
+    int best = -1;
+    for (const auto& [c, n] : bodies)
+      if (n > best) best = n, shape = c;
+    std::map<uint32_t, int> sp;
+    for (const auto& x : main)
+      if (x.agent.cells == shape) ++sp[x.agent.springs];
+    best = -1;
+    for (const auto& [c, n] : sp)
+      if (n > best) best = n, springs = c;
+  }
+  stage.write_int("shape_cells", shape);
+  stage.write_int("shape_springs", springs);
+
+  const char* names[2] = {"same_shape", "same_shape_springs"};
+  const char* sources[2] = {"behaviour,springs,pairing", "behaviour,pairing"};
+  for (int v = 0; v < 2; ++v) {
+    const std::string base = std::string("graded/") + names[v];
+    if (!file.has(base)) file.create_group(base);
+    io::h5::Node g = file.group(base);
+    g.write_string("diversity_sources", sources[v]);
+    if (g.has_attribute("status") && g.read_string("status") == "complete") continue;
+    g.write_string("status", "running");
+
+    // 1. the population: one body (and for v = 1 one spring genotype), rest positions fixed
+    io::RunConfig pc = cfg;
+    pc.agents.population = GP;
+    pc.agents.body_fixed = true;
+    pc.agents.rest_moves = false;
+    AgentsSpec spec;
+    spec.group = base + "/agents";
+    spec.label = std::string("graded ") + names[v];
+    spec.stream = kGradedStage + 100000 * v;
+    spec.fixed_cells = shape;
+    spec.spring_descriptor = true;
+    if (v == 1) {
+      // no evolution: GP controllers from different seeds, each with a lineage's gradient budget
+      pc.agents.springs_fixed = true;
+      pc.agents.epochs = (cfg.agents.generations + 1) * cfg.agents.epochs;
+      pc.agents.generations = 0;
+      spec.fixed_springs = springs;
+    }
+    if (!(file.has(spec.group) && file.group(spec.group).has_attribute("status") &&
+          file.group(spec.group).read_string("status") == "complete"))
+      run_agents_stage(comm, pc, file, checkpoint, spec);
+    const std::vector<collective::Agent> agents = load_population(comm, file, spec.group);
+
+    // 2. weak connectors trained on diverse pairs of this population, on flat
+    if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
+    std::vector<ConnectorSlot> slots;
+    for (int r = 0; r < R; ++r)
+      slots.push_back({cfg.connectors.weak_stiffness, true, "flat", kGradedStage + 100000 * v + 50000 + r,
+                       base + "/connectors/weak_diverse", r});
+    TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
+                 cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
+    const auto weights = train_connectors(comm, cfg, file, agents, slots, ts, checkpoint);
+
+    // 3. agents alone and diverse pairs in every environment
+    Rng prng = make_rng(cfg.run.seed, kGradedStage + 100000 * v + 90000, 0);
+    const auto pairs = collective::random_pairs(prng, GP, NP);
+    {
+      std::vector<int64_t> rows;
+      std::vector<int32_t> p;
+      if (rank == 0)
+        for (int q = 0; q < NP; ++q) rows.push_back(q), p.push_back(pairs[q].first), p.push_back(pairs[q].second);
+      file.write_rows<int32_t>(base + "/diverse_pairs", {static_cast<hsize_t>(NP), 2}, rows, p);
+    }
+    std::vector<GroupEpisode> eps;
+    if (rank == 0) {
+      for (int e = 0; e < E; ++e)
+        for (int i = 0; i < GP; ++i) eps.push_back({0, e, {i}});
+      for (int e = 0; e < E; ++e)
+        for (int r = 0; r < R; ++r)
+          for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
+    }
+    const std::vector<EpisodeDone> d =
+        run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, cfg.deploy.episode_steps, false);
+    std::vector<int64_t> rows;
+    std::vector<double> au, ab, pu, pb;
+    std::vector<uint8_t> as, ps;
+    if (rank == 0) {
+      for (int e = 0; e < E; ++e) rows.push_back(e);
+      for (size_t q = 0; q < d.size(); ++q) {
+        const bool alone = q < static_cast<size_t>(E) * GP;
+        (alone ? au : pu).push_back(d[q].travel_u);
+        (alone ? ab : pb).push_back(d[q].travel_bl);
+        (alone ? as : ps).push_back(d[q].status);
+      }
+    }
+    const hsize_t hE = E, hG = GP, hR = R, hN = NP;
+    file.write_rows<double>(base + "/deploy/agents/travel_u", {hE, hG}, rows, au);
+    file.write_rows<double>(base + "/deploy/agents/travel_bl", {hE, hG}, rows, ab);
+    file.write_rows<uint8_t>(base + "/deploy/agents/status", {hE, hG}, rows, as);
+    file.write_rows<double>(base + "/deploy/pairs/travel_u", {hE, hR, hN}, rows, pu);
+    file.write_rows<double>(base + "/deploy/pairs/travel_bl", {hE, hR, hN}, rows, pb);
+    file.write_rows<uint8_t>(base + "/deploy/pairs/status", {hE, hR, hN}, rows, ps);
+    g.write_string("status", "complete");
+    checkpoint();
+    if (rank == 0) {
+      std::printf("graded %s:", names[v]);
+      for (int e = 0; e < E; ++e) {
+        const auto [am, ab2] = ok_mean(d, static_cast<size_t>(e) * GP, static_cast<size_t>(e + 1) * GP);
+        const size_t pb0 = static_cast<size_t>(E) * GP + static_cast<size_t>(e) * R * NP;
+        const auto [pm, pb2] = ok_mean(d, pb0, pb0 + static_cast<size_t>(R) * NP);
+        std::printf(" %s alone %.2f pairs %.2f;", envs[e].c_str(), am, pm);
+        (void)ab2, (void)pb2;
+      }
+      std::printf(" BL\n");
+      std::fflush(stdout);
+    }
+  }
+  stage.write_string("status", "complete");
+  checkpoint();
 }
 
 }  // namespace divcoll::mpi

@@ -12,6 +12,7 @@ namespace divcoll::mpi {
 
 inline constexpr uint64_t kSpecialistsStage = 4000;
 inline constexpr uint64_t kScalingStage = 5000;
+inline constexpr uint64_t kGradedStage = 1000000;
 
 // Run file, group /specialists (attributes status, environments = the novel ones, replicates):
 //   <env>/params (R × P_c), <env>/curve_u, curve_bl, nan_pairs (I × R)   as in /connectors
@@ -23,6 +24,14 @@ inline constexpr uint64_t kScalingStage = 5000;
 //   n<N>/diverse_agents           (R·draws × N) the agents of each diverse chain, heap order
 //   travel_bl, travel_u, status   (E × S × 2 × R × draws); variant 0: N clones of agent `draw` with a weak
 //                                 uniform-trained connector; 1: the diverse chain with a weak diverse-trained one
+// group /graded (attributes status, environments, populations, shape_cells, shape_springs): per population
+// same_shape (one body, evolved springs) and same_shape_springs (one body and spring genotype, trained
+// controllers only), each with attributes status and diversity_sources:
+//   agents/                    as /agents (gen_NNN, final), graded.population agents
+//   connectors/weak_diverse/   params, curve_* (as /connectors); connectors/state/*
+//   diverse_pairs              (pairs × 2)
+//   deploy/agents/travel_bl, travel_u, status   (E × graded.population)
+//   deploy/pairs/travel_bl, travel_u, status    (E × R × pairs)
 
 void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                            const std::function<void()>& checkpoint);

@@ -97,9 +97,15 @@ void update_rest_lengths(Agent& a) {
 }
 
 Agent random_agent(Rng& rng, const sim::Constants& c) {
+  const uint32_t cells = morph::random_body(rng);
+  const uint32_t springs = morph::random_springs(rng);
+  return make_agent(cells, springs, rng, c);
+}
+
+Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c) {
   Agent a;
-  a.cells = morph::random_body(rng);
-  a.springs = morph::random_springs(rng);
+  a.cells = cells;
+  a.springs = springs;
   const morph::AgentGeometry g = morph::agent_geometry(a.cells, a.springs);
   a.rest_pos = g.rest_pos;
   a.spring_i = g.spring_i;

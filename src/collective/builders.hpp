@@ -38,6 +38,8 @@ double body_length(const Agent& a);
 
 // a random valid agent with a freshly initialised controller
 Agent random_agent(Rng& rng, const sim::Constants& c = {});
+// an agent of the given body and spring genotypes at its lattice positions, with a fresh controller
+Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c = {});
 // rebuilds rest_length from rest_pos (after the rest positions changed)
 void update_rest_lengths(Agent& a);
 

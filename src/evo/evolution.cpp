@@ -19,6 +19,43 @@ morph::Descriptor agent_descriptor(const collective::Agent& a) {
   return morph::descriptor(g);
 }
 
+morph::Descriptor spring_layout_descriptor(const collective::Agent& a) {
+  morph::Descriptor d = agent_descriptor(a);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (size_t m = 0; m < a.rest_pos.size() / 2; ++m) {
+    x0 = std::min(x0, a.rest_pos[2 * m]), x1 = std::max(x1, a.rest_pos[2 * m]);
+    y0 = std::min(y0, a.rest_pos[2 * m + 1]), y1 = std::max(y1, a.rest_pos[2 * m + 1]);
+  }
+  const double tol = morph::kMirrorTolerance;
+  auto near = [&](double ax, double ay, double bx, double by) { return std::hypot(ax - bx, ay - by) <= tol; };
+  for (int axis = 0; axis < 2; ++axis) {
+    int active = 0, matched = 0;
+    for (size_t r = 0; r < a.spring_i.size(); ++r) {
+      if (a.amplitude[r] == 0) continue;
+      ++active;
+      auto mirror = [&](int m, double& x, double& y) {
+        x = a.rest_pos[2 * m], y = a.rest_pos[2 * m + 1];
+        if (axis == 0) x = x0 + x1 - x;
+        else y = y0 + y1 - y;
+      };
+      double px, py, qx, qy;
+      mirror(a.spring_i[r], px, py);
+      mirror(a.spring_j[r], qx, qy);
+      for (size_t t = 0; t < a.spring_i.size(); ++t) {
+        if (a.amplitude[t] == 0) continue;
+        const double ix = a.rest_pos[2 * a.spring_i[t]], iy = a.rest_pos[2 * a.spring_i[t] + 1];
+        const double jx = a.rest_pos[2 * a.spring_j[t]], jy = a.rest_pos[2 * a.spring_j[t] + 1];
+        if ((near(px, py, ix, iy) && near(qx, qy, jx, jy)) || (near(px, py, jx, jy) && near(qx, qy, ix, iy))) {
+          ++matched;
+          break;
+        }
+      }
+    }
+    d[7 + axis] = active ? static_cast<double>(matched) / active : 0.0;
+  }
+  return d;
+}
+
 collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,
                                  const GdOptions& gd) {
   collective::Agent child = parent;

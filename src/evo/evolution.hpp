@@ -33,6 +33,13 @@ struct Individual {
 // the behaviour descriptor of an agent's body (SPEC §4.2)
 morph::Descriptor agent_descriptor(const collective::Agent& a);
 
+// the descriptor for a population of one body shape (graded diversity, SPEC §7.5): entries 7 and 8, the
+// body's mirror symmetries (constant over such a population), become the mirror symmetries of its active
+// springs: the fraction of active springs whose mirror image (both ends, about the vertical / horizontal
+// centre line of the rest positions) lies within 0.01 u of an active spring. Entry 3 (active springs per
+// bounding-box area) already depends on the springs; the others are constant and drop out of uniqueness.
+morph::Descriptor spring_layout_descriptor(const collective::Agent& a);
+
 // a copy of `parent` (weights and rest positions included) with its body bits flipped and repaired, its
 // spring bits flipped, and its rest positions jittered; a changed body starts from its lattice positions
 collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,

@@ -162,7 +162,7 @@ namespace {
 // the stages write the datasets they promise, with the shapes the README gives
 TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
-  const Exec r = run("run " + cfg + " run.stages=agents,connectors,deploy,specialists,scaling --out " + path("run.h5"));
+  const Exec r = run("run " + cfg + " --out " + path("run.h5"));  // every stage
   ASSERT_EQ(r.code, 0) << r.out;
   const io::h5::File f = io::h5::File::open(path("run.h5"));
   using D = io::h5::Dims;
@@ -231,6 +231,30 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const auto ctb = f.read<double>("scaling/travel_bl");
   for (size_t q = 0; q < cst.size(); ++q) EXPECT_EQ(std::isfinite(ctb[q]), cst[q] == 0) << "chain episode " << q;
   EXPECT_FALSE(fs::exists(path("run.h5.ckpt"))) << "the checkpoint is removed when the run completes";
+
+  // graded diversity: two populations of one body shape, their connectors and deployment
+  const hsize_t GP = 4;
+  EXPECT_EQ(f.group("graded").read_string("status"), "complete");
+  const auto shape = static_cast<int64_t>(f.group("graded").read_int("shape_cells"));
+  const auto main_cells = f.read<int64_t>("agents/final/cells");
+  EXPECT_NE(std::find(main_cells.begin(), main_cells.end(), shape), main_cells.end()) << "the shape is the main population's";
+  for (const char* pop : {"same_shape", "same_shape_springs"}) {
+    const std::string g = std::string("graded/") + pop;
+    EXPECT_EQ(f.group(g).read_string("status"), "complete") << pop;
+    EXPECT_TRUE(f.group(g).has_attribute("diversity_sources")) << pop;
+    for (int64_t c : f.read<int64_t>(g + "/agents/final/cells", D{GP})) EXPECT_EQ(c, shape) << pop;
+    // rest positions stay at the lattice: every agent of the population has the same ones
+    const auto rp = f.read<double>(g + "/agents/final/rest_pos", D{GP, 11, 2});
+    for (hsize_t i = 1; i < GP; ++i)
+      EXPECT_TRUE(std::equal(rp.begin(), rp.begin() + 22, rp.begin() + 22 * i)) << pop << " agent " << i;
+    EXPECT_EQ(f.dims(g + "/connectors/weak_diverse/params"), (D{R, Pc})) << pop;
+    EXPECT_EQ(f.dims(g + "/deploy/agents/travel_bl"), (D{E, GP})) << pop;
+    EXPECT_EQ(f.dims(g + "/deploy/pairs/travel_bl"), (D{E, R, NP})) << pop;
+  }
+  const auto sp = f.read<int64_t>("graded/same_shape_springs/agents/final/springs");
+  for (int64_t x : sp) EXPECT_EQ(x, f.group("graded").read_int("shape_springs"));
+  const auto p0 = f.read<double>("graded/same_shape_springs/agents/final/params", D{GP, Pa});
+  EXPECT_FALSE(std::equal(p0.begin(), p0.begin() + Pa, p0.begin() + Pa)) << "controllers from different seeds";
 
   // export: the scene of a stored episode simulates to the stored travel, bit for bit
   struct Case {
