@@ -1,0 +1,176 @@
+#!/usr/bin/python3
+"""The numbers behind the paper's claims, from a divcoll run file alone, as Markdown.
+
+    /usr/bin/python3 postprocess/summary.py RUN.h5 [--out SUMMARY.md]
+
+Every mean is over the episodes whose status is ok (0); episodes that ended nan or unstable are counted
+and reported, never averaged. "Novel" is the mean over the novel environments of each environment's mean
+(every environment weighs the same, as in the paper's Fig. 2A).
+"""
+import argparse
+import sys
+
+import h5py
+import numpy as np
+
+
+def _s(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def ok_mean(travel, status):
+    """mean over ok episodes, and the count of not-ok ones"""
+    travel, status = np.asarray(travel, float), np.asarray(status)
+    ok = (status == 0) & np.isfinite(travel)
+    return (float(travel[ok].mean()) if ok.any() else float("nan")), int((~ok).sum())
+
+
+def env_means(travel, status):
+    """per-environment ok means of arrays shaped (E, ...)"""
+    out, bad = [], 0
+    for e in range(travel.shape[0]):
+        m, b = ok_mean(travel[e], status[e])
+        out.append(m)
+        bad += b
+    return np.array(out), bad
+
+
+def fmt(x):
+    return "—" if not np.isfinite(x) else f"{x:.3f}"
+
+
+def summarize(path):
+    lines = []
+    w = lines.append
+    with h5py.File(path, "r") as f:
+        w(f"# divcoll run summary: `{path}`\n")
+        w(f"commit {_s(f.attrs.get('git_commit', '?'))}, seed {_s(f.attrs.get('seed', '?'))}, "
+          f"ranks {_s(f.attrs.get('ranks', '?'))}, started {_s(f.attrs.get('start_time', '?'))}, "
+          f"ended {_s(f.attrs.get('end_time', '(not finished)'))}\n")
+        w("| stage | status | wall time (s, summed over sessions) |\n|---|---|---|")
+        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]:
+            if st in f:
+                g = f[st]
+                wall = g.attrs.get("wall_s", g.attrs.get("wall_s_last_session", float("nan")))
+                w(f"| {st} | {_s(g.attrs.get('status', '?'))} | {float(wall):.0f} |")
+        w("")
+        if "agents/final" in f:
+            fit = f["agents/final/fitness"][()]
+            w(f"**Agents** (final population of {len(fit)}): fitness {fit.mean():.3f} ± {fit.std():.3f} BL "
+              f"(min {fit.min():.3f}, max {fit.max():.3f}); {len(set(f['agents/final/cells'][()]))} body placements.\n")
+        if "connectors" in f:
+            w("**Connector training** (mean pair travel of the batch, BL, mean over replicates):\n")
+            w("| kind | iteration 1 | last iteration | best iteration |\n|---|---|---|---|")
+            for kind in _s(f["connectors"].attrs["kinds"]).split(","):
+                if f"connectors/{kind}/curve_bl" not in f:
+                    continue
+                c = f[f"connectors/{kind}/curve_bl"][()]
+                m = np.nanmean(c, axis=1)
+                done = int(f["connectors"].attrs.get("iterations_done", len(m)))
+                m = m[:done]
+                if len(m):
+                    w(f"| {kind} | {fmt(m[0])} | {fmt(m[-1])} (iteration {len(m)}) | {fmt(np.nanmax(m))} |")
+            w("")
+        if "deploy/collectives/travel_bl" in f:
+            d = f["deploy"]
+            envs = _s(d.attrs["environments"]).split(",")
+            types = _s(d.attrs["types"]).split(",")
+            done = int(d.attrs.get("envs_done", len(envs)))
+            novel = [i for i, e in enumerate(envs[:done]) if e != "flat"]
+            fl = envs.index("flat")
+            at, ast = d["agents/travel_bl"][()], d["agents/status"][()]
+            ct, cst = d["collectives/travel_bl"][()], d["collectives/status"][()]
+            w(f"**Deployment** (Fig. 2A; {done} of {len(envs)} environments done; BL in {int(ct.shape[-1])} pairs × "
+              f"{int(ct.shape[2])} replicates per type):\n")
+            w("| | flat | novel (mean of env means) | not ok |\n|---|---|---|---|")
+            am, ab = env_means(at[:done], ast[:done])
+            alone_flat, alone_novel = am[fl], np.mean(am[novel]) if novel else float("nan")
+            w(f"| independent agents | {fmt(alone_flat)} | {fmt(alone_novel)} | {ab} |")
+            rows = {}
+            for t, name in enumerate(types):
+                m, b = env_means(ct[:done, t], cst[:done, t])
+                rows[name] = (m[fl], np.mean(m[novel]) if novel else float("nan"))
+                w(f"| {name} | {fmt(m[fl])} | {fmt(rows[name][1])} | {b} |")
+            w("")
+            beats = [n for n, (fv, _) in rows.items() if fv > alone_flat]
+            w(f"- collective types beating independent agents on flat: {len(beats)} of {len(rows)}")
+            if novel:
+                best = max(rows, key=lambda n: rows[n][1])
+                w(f"- best type in the novel environments: {best} ({fmt(rows[best][1])} BL)")
+            w("- transplant on flat (Fig. 2B): " + "; ".join(
+                f"{k} deployed uniform {fmt(rows[k + '@uniform'][0])} / diverse {fmt(rows[k + '@diverse'][0])}"
+                for k in sorted({n.split('@')[0] for n in rows})))
+            w("")
+            w("Per environment (BL):\n")
+            w("| environment | agents | " + " | ".join(types) + " |\n|---|---|" + "---|" * len(types))
+            for e in range(done):
+                cells = [fmt(ok_mean(ct[e, t], cst[e, t])[0]) for t in range(len(types))]
+                w(f"| {envs[e]} | {fmt(am[e])} | " + " | ".join(cells) + " |")
+            w("")
+        if "specialists/travel_bl" in f and _s(f["specialists"].attrs.get("status", "")) == "complete":
+            envs = _s(f["specialists"].attrs["environments"]).split(",")
+            t, s = f["specialists/travel_bl"][()], f["specialists/status"][()]
+            w("**Specialists** (Fig. S2; best replicate in its own environment, BL):\n")
+            w("| environment | best specialist | mean of specialists |\n|---|---|---|")
+            for e, env in enumerate(envs):
+                reps = [ok_mean(t[e, r], s[e, r])[0] for r in range(t.shape[1])]
+                w(f"| {env} | {fmt(np.nanmax(reps))} | {fmt(np.nanmean(reps))} |")
+            w("")
+        if "scaling/travel_bl" in f and _s(f["scaling"].attrs.get("status", "")) == "complete":
+            envs = _s(f["scaling"].attrs["environments"]).split(",")
+            sizes = f["scaling/sizes"][()]
+            t, s = f["scaling/travel_bl"][()], f["scaling/status"][()]
+            novel = [i for i, e in enumerate(envs) if e != "flat"]
+            w("**Scaling** (Fig. 4; chains, mean over novel environments of env means, BL):\n")
+            w("| N | uniform | diverse |\n|---|---|---|")
+            for si, n in enumerate(sizes):
+                vals = []
+                for v in range(2):
+                    m, _ = env_means(t[:, si, v], s[:, si, v])
+                    vals.append(np.mean(m[novel]))
+                w(f"| {n} | {fmt(vals[0])} | {fmt(vals[1])} |")
+            w("")
+        if "graded" in f and _s(f["graded"].attrs.get("status", "")) == "complete":
+            envs = _s(f["graded"].attrs["environments"]).split(",")
+            novel = [i for i, e in enumerate(envs) if e != "flat"]
+            w("**Graded diversity** (Fig. S3; novel environments, mean of env means, BL):\n")
+            w("| population | diversity sources | agents alone | weak diverse pairs |\n|---|---|---|---|")
+            if "deploy/collectives/travel_bl" in f:
+                d = f["deploy"]
+                types = _s(d.attrs["types"]).split(",")
+                am, _ = env_means(d["agents/travel_bl"][()], d["agents/status"][()])
+                if "weak_diverse@diverse" in types:
+                    t = types.index("weak_diverse@diverse")
+                    pm, _ = env_means(d["collectives/travel_bl"][()][:, t], d["collectives/status"][()][:, t])
+                    w(f"| main | behaviour,springs,shape,pairing | {fmt(np.mean(am[novel]))} | {fmt(np.mean(pm[novel]))} |")
+            for pop in ["same_shape", "same_shape_springs"]:
+                g = f[f"graded/{pop}"]
+                am, _ = env_means(g["deploy/agents/travel_bl"][()], g["deploy/agents/status"][()])
+                pm, _ = env_means(g["deploy/pairs/travel_bl"][()], g["deploy/pairs/status"][()])
+                w(f"| {pop} | {_s(g.attrs.get('diversity_sources', '?'))} | {fmt(np.mean(am[novel]))} | "
+                  f"{fmt(np.mean(pm[novel]))} |")
+            w("")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", help="divcoll run file (HDF5)")
+    ap.add_argument("--out", help="write the Markdown here instead of printing it")
+    a = ap.parse_args(argv)
+    try:
+        text = summarize(a.run)
+    except (OSError, KeyError) as e:
+        print(f"summary: cannot read {a.run}: {e}", file=sys.stderr)
+        return 2
+    if a.out:
+        with open(a.out, "w") as fh:
+            fh.write(text + "\n")
+        print(f"summary: wrote {a.out}")
+    else:
+        print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+"""Tests of summary.py on a synthetic run file: not-ok episodes are counted and never averaged, novel
+means are means of environment means, the claims' lines follow the numbers."""
+
+import os
+import sys
+import tempfile
+import unittest
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+
+import summary  # noqa: E402
+
+
+class SummaryTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.path = os.path.join(self.dir.name, "run.h5")
+        envs = ["flat", "ice", "gap"]
+        types = ["weak_uniform@uniform", "weak_uniform@diverse"]
+        with h5py.File(self.path, "w") as f:
+            f.attrs["format"] = "divcoll-run"
+            f.attrs["seed"] = 1
+            d = f.create_group("deploy")
+            d.attrs["status"] = "complete"
+            d.attrs["environments"] = ",".join(envs)
+            d.attrs["types"] = ",".join(types)
+            d.attrs["envs_done"] = 3
+            # agents alone: flat 1.0; ice 0.5; gap 0.1 — one flat episode is nan and holds a huge number
+            a = np.array([[1.0, 1.0, 1e9], [0.5, 0.5, 0.5], [0.1, 0.1, 0.1]])
+            s = np.zeros((3, 3), np.uint8)
+            s[0, 2] = 1
+            d["agents/travel_bl"] = a
+            d["agents/status"] = s
+            # collectives (E, T, R=1, N=2): type 0 beats agents on flat (2.0), type 1 does not (0.5)
+            c = np.zeros((3, 2, 1, 2))
+            c[0, 0], c[0, 1] = 2.0, 0.5
+            c[1, 0], c[1, 1] = 0.2, 1.0
+            c[2, 0], c[2, 1] = 0.2, 0.6
+            d["collectives/travel_bl"] = c
+            d["collectives/status"] = np.zeros(c.shape, np.uint8)
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def test_not_ok_episodes_are_counted_and_left_out(self):
+        text = summary.summarize(self.path)
+        row = [l for l in text.splitlines() if l.startswith("| independent agents")][0]
+        cells = [c.strip() for c in row.split("|")[1:-1]]
+        self.assertEqual(cells[1], "1.000")  # the nan episode's 1e9 is not in the mean
+        self.assertEqual(cells[2], "0.300")  # (0.5 + 0.1) / 2: a mean of environment means
+        self.assertEqual(cells[3], "1")
+
+    def test_claim_lines_follow_the_numbers(self):
+        text = summary.summarize(self.path)
+        self.assertIn("beating independent agents on flat: 1 of 2", text)
+        self.assertIn("best type in the novel environments: weak_uniform@diverse (0.800 BL)", text)
+
+    def test_ok_mean_of_nothing_is_nan_not_zero(self):
+        m, bad = summary.ok_mean([1.0, 2.0], [1, 2])
+        self.assertTrue(np.isnan(m))
+        self.assertEqual(bad, 2)
+
+
+if __name__ == "__main__":
+    unittest.main()
