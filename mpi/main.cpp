@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "common/check.hpp"
 #include "mpi/run_cmd.hpp"
@@ -11,7 +12,7 @@ int main(int argc, char** argv) {
   using namespace divcoll;
   CLI::App app{"divcoll: morphological diversity within machines (Hein & Bongard), reproduced"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string(DIVCOLL_VERSION) + " (" DIVCOLL_GIT_COMMIT ")");
+  app.set_version_flag("--version", std::string(DIVCOLL_VERSION) + " (" + git_commit() + ")");
 
   cli::SimulateArgs sim;
   auto* s = app.add_subcommand("simulate", "simulate a scene file and write its trajectory file (SPEC §9)");

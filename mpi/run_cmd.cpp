@@ -11,6 +11,7 @@
 #include <set>
 
 #include "common/check.hpp"
+#include "common/version.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "mpi/agents_stage.hpp"
@@ -183,7 +184,7 @@ int run_main(int argc, char** argv, const RunArgs& args) {
         fresh.write_string("format", "divcoll-run");
         fresh.write_int("version", 1);
         fresh.write_string("divcoll_version", DIVCOLL_VERSION);
-        fresh.write_string("git_commit", DIVCOLL_GIT_COMMIT);
+        fresh.write_string("git_commit", git_commit());
         fresh.write_int("seed", static_cast<int64_t>(cfg.run.seed));
         fresh.write_string("config", toml);
         fresh.write_string("start_time", now_iso());
@@ -205,7 +206,7 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     if (!existing) ckpt();
     file.write_int("ranks", size);
     if (rank == 0)
-      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, DIVCOLL_GIT_COMMIT,
+      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
                   args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
                   path.c_str());
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "morph/body.hpp"
@@ -63,7 +64,7 @@ double time_batch(sim::Simulator& sim, const std::vector<sim::Scene>& batch, int
 
 int bench(const BenchArgs& a) {
   std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
-              DIVCOLL_GIT_COMMIT);
+              divcoll::git_commit());
   const Fixture f = make_fixture(24, 7);
 
   // ---- throughput --------------------------------------------------------------------------------
