@@ -6,6 +6,7 @@
 #include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "common/check.hpp"
+#include "io/config.hpp"
 #include "mpi/run_cmd.hpp"
 
 int main(int argc, char** argv) {
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
   b->add_flag("--quick", bench.quick, "fewer rows");
 
   auto* e = app.add_subcommand("envs", "list the built-in environments");
+  auto* keys = app.add_subcommand("keys", "every config key with its type, default, allowed range, unit and meaning (markdown)");
 
   std::string cmp_a, cmp_b;
   auto* cmpc = app.add_subcommand("compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)");
@@ -117,6 +119,7 @@ int main(int argc, char** argv) {
     if (*x) return cli::export_scene(ex);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
+    if (*keys) return std::printf("%s", io::schema_markdown().c_str()) < 0;
     if (*g) return cli::gd_compare(gdc);
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*v) return mpi::run_main(argc, argv, evo);

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 
 #include <string>
 #include <vector>
@@ -166,6 +168,15 @@ TEST(ConfigSchema, MarkdownListsEveryKey) {
   for (char c : md) rows += c == '\n';
   EXPECT_EQ(rows, config_keys().size() + 2);  // header and rule
   EXPECT_THAT(md, HasSubstr("[2, 100000]"));  // agents.population's range
+}
+
+// the README's key table is the schema's (regenerate it with `divcoll keys`)
+TEST(ConfigSchema, ReadmeTableIsTheSchema) {
+  std::ifstream in(testing::source_dir() + "/README.md");
+  ASSERT_TRUE(in) << "README.md not found";
+  const std::string readme((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(readme.find(schema_markdown()), std::string::npos)
+      << "README.md's config table differs from the schema: replace it with the output of `divcoll keys`";
 }
 
 TEST(ConfigSchema, DefaultsAreValidAndAnEmptyFileGivesThem) {
