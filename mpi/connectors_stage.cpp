@@ -262,9 +262,7 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   if (!file.has("connectors")) file.create_group("connectors");
   io::h5::Node stage = file.group("connectors");
   stage.write_string("status", "running");
-  std::string kind_list;
-  for (const auto& k : kinds) kind_list += (kind_list.empty() ? "" : ",") + k;
-  stage.write_string("kinds", kind_list);
+  stage.write_string("kinds", join(kinds));
   stage.write_int("replicates", R);
   if (!file.has("connectors/anchors")) {
     std::vector<int64_t> rows;

@@ -20,23 +20,9 @@ using io::h5::Dims;
 struct Episode {
   int32_t type = -1, replicate = 0, a = 0, b = 0;
 };
-struct EpisodeDone {
-  double travel_u = 0, travel_bl = 0;
-  uint8_t status = 0;
-};
 template <class Ar>
 void serialize(Ar& ar, Episode& e, unsigned) {
   ar & e.type & e.replicate & e.a & e.b;
-}
-template <class Ar>
-void serialize(Ar& ar, EpisodeDone& d, unsigned) {
-  ar & d.travel_u & d.travel_bl & d.status;
-}
-
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
 }
 
 }  // namespace

@@ -19,14 +19,6 @@ namespace {
 
 using io::h5::Dims;
 
-struct EpisodeDone {
-  double travel_u = 0, travel_bl = 0;
-  uint8_t status = 0;
-};
-template <class Ar>
-void serialize(Ar& ar, EpisodeDone& d, unsigned) {
-  ar & d.travel_u & d.travel_bl & d.status;
-}
 // a pair or chain episode: the agents (heap order), which connector weights, which environment
 struct GroupEpisode {
   int32_t weights = 0, env = 0;
@@ -37,11 +29,6 @@ void serialize(Ar& ar, GroupEpisode& e, unsigned) {
   ar & e.weights & e.env & e.agents;
 }
 
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
-}
 
 std::vector<std::string> novel_environments(const io::RunConfig& cfg) {
   std::vector<std::string> out;

@@ -47,6 +47,27 @@ T unpack(const std::string& bytes) {
 
 }  // namespace divcoll::mpi
 
+namespace divcoll::mpi {
+
+// the outcome of one forward episode (an agent alone, a pair or a chain), the result of deployment items
+struct EpisodeDone {
+  double travel_u = 0, travel_bl = 0;
+  uint8_t status = 0;  // sim::Status: 0 ok, 1 nan, 2 unstable
+};
+template <class Ar>
+void serialize(Ar& ar, EpisodeDone& d, unsigned) {
+  ar & d.travel_u & d.travel_bl & d.status;
+}
+
+// names as one comma-separated attribute value
+inline std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+}  // namespace divcoll::mpi
+
 namespace boost::serialization {
 
 template <class Ar>

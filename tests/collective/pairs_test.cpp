@@ -7,16 +7,12 @@
 
 #include "collective/pairs.hpp"
 #include "morph/body.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
 
-collective::Agent agent(uint64_t seed) {
-  Rng rng = make_rng(seed, 77, 0);
-  collective::Agent a = collective::random_agent(rng);
-  a.anchors = collective::compute_anchors(a, {}, 300);
-  return a;
-}
+collective::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
 
 // the training loss of SPEC §6.4 on one batch, and its gradient w.r.t. the connector weights
 struct Loss {

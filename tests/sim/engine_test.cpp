@@ -8,17 +8,13 @@
 #include "common/check.hpp"
 #include "io/environments.hpp"
 #include "morph/body.hpp"
+#include "testing.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll {
 namespace {
 
-collective::Agent make_agent(uint64_t seed) {
-  Rng rng = make_rng(seed, 3, 0);
-  collective::Agent a = collective::random_agent(rng);
-  a.anchors = collective::compute_anchors(a, {}, 300);
-  return a;
-}
+collective::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed, 3); }
 
 std::vector<double> make_conn(uint64_t seed) {
   Rng rng = make_rng(seed, 4, 0);
