@@ -121,7 +121,8 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     if (fs::exists(path) && !args.resume && !args.force)
       throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
     const fs::path parent = fs::absolute(path).parent_path();
-    if (rank == 0) fs::create_directories(parent);
+    std::error_code mkdir_error;  // a failure is reported below, on every rank alike
+    if (rank == 0) fs::create_directories(parent, mkdir_error);
     MPI_Barrier(MPI_COMM_WORLD);
     DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
     DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");

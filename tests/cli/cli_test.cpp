@@ -105,6 +105,23 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
       {"run " + testing::source_dir() + "/configs/tiny.toml deploy.environments=flat,moon --out " + path("r.h5"),
        "moon"},
       {"evolve " + path("text.h5") + " --out " + path("r.h5"), "text.h5"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml connectors.replicates=-1 --out " + path("r.h5"),
+       "connectors.replicates = -1 is out of range [1, 1000]"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml agents.population=ten --out " + path("r.h5"),
+       "agents.population"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml deploy.episode_steps=0 --out " + path("r.h5"),
+       "deploy.episode_steps"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml scaling.draws=50 --out " + path("r.h5"), "scaling.draws"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml run.stages=agents,dance --out " + path("r.h5"), "dance"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml --resume --force --out " + path("r.h5"), "contradict"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml --from deploy --out " + path("r.h5"), "--base"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml --from dance --base " + good + " --out " + path("r.h5"),
+       "--from"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml --from deploy --base " + good + " --out " + path("r.h5"),
+       "not a usable run file"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml --out " + path("text.h5") + "/r.h5", "output folder"},
+      {"export " + good + " --what pair --out " + path("s.h5"), "not a divcoll run file"},
+      {"export " + good + " --what dance --out " + path("s.h5"), "--what"},
   };
   // bad input exits 2 (an internal failure would exit 1, a crash 134)
   for (const Case& c : cases) {
