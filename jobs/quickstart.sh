@@ -10,6 +10,7 @@ mkdir -p out
 mpirun -np "$(nproc)" build/divcoll run configs/quick.toml --out out/quick.h5 --force
 /usr/bin/python3 postprocess/fig_s1.py out/quick.h5 --out out/figures
 /usr/bin/python3 postprocess/summary.py out/quick.h5 --out out/quick_summary.md
+/usr/bin/python3 postprocess/contact_sheet.py out/quick.h5 --divcoll build/divcoll --out out/figures
 build/divcoll demo --out out/demo
 echo
 echo "run file: out/quick.h5    summary: out/quick_summary.md    figures: out/figures/    demo scenes: out/demo/"
