@@ -1,5 +1,6 @@
 #include "mpi/deploy_stage.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -18,11 +19,32 @@ using io::h5::Dims;
 
 // one episode: an agent alone (type = −1) or a pair of a collective type
 struct Episode {
-  int32_t type = -1, replicate = 0, a = 0, b = 0;
+  int32_t type = -1, replicate = 0, a = 0, b = 0, pair = 0;
 };
 template <class Ar>
 void serialize(Ar& ar, Episode& e, unsigned) {
-  ar & e.type & e.replicate & e.a & e.b;
+  ar & e.type & e.replicate & e.a & e.b & e.pair;
+}
+// an episode's result, with the hidden states it keeps (weak connectors deployed as trained)
+struct DeployDone {
+  EpisodeDone done;
+  std::vector<float> hidden;          // K × 32
+  std::vector<int32_t> hidden_index;  // K: step · 5 + connector spring
+};
+template <class Ar>
+void serialize(Ar& ar, DeployDone& d, unsigned) {
+  ar & d.done & d.hidden & d.hidden_index;
+}
+
+// K of `n` indices, distinct and sorted, drawn from rng (all of them when K ≥ n)
+std::vector<int32_t> sample_indices(Rng& rng, int n, int K) {
+  std::vector<int32_t> idx(n);
+  for (int i = 0; i < n; ++i) idx[i] = i;
+  const int k = std::min(K, n);
+  for (int i = 0; i < k; ++i) std::swap(idx[i], idx[i + uniform_int(rng, n - i)]);
+  idx.resize(k);
+  std::sort(idx.begin(), idx.end());
+  return idx;
 }
 
 }  // namespace
@@ -57,6 +79,14 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     }
   }
   const int T = static_cast<int>(types.size());
+  // hidden states (SPEC §8.2) of the weak connectors deployed as trained, at most deploy.hidden_subsample
+  // per (type, replicate, environment): K per episode, drawn from the episode's own stream
+  std::vector<int> hidden_types;
+  for (int t = 0; t < T; ++t)
+    if (types[t] == "weak_uniform@uniform" || types[t] == "weak_diverse@diverse") hidden_types.push_back(t);
+  const int per_episode = D.episode_steps * 5;
+  const int K = D.hidden_subsample == 0 ? per_episode
+                                        : std::min(per_episode, (D.hidden_subsample + NP - 1) / NP);
   Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
   const auto diverse_pairs = collective::random_pairs(prng, pop, NP);
   const auto uniform_pairs = collective::uniform_pairs(NP);
@@ -78,18 +108,40 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
 
   sim::Simulator sim;
   std::string env_now;
+  int env_index = 0;
   auto compute = [&](const std::string& bytes) {
     const Episode e = unpack<Episode>(bytes);
-    collective::PairOutcome o =
-        e.type < 0 ? collective::run_alone(sim, agents[e.a], env_now, D.episode_steps)
-                   : collective::run_pair(sim, agents[e.a], agents[e.b], weights[e.type][e.replicate], stiffness[e.type],
-                                          env_now, D.episode_steps, false);
-    return pack(EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)});
+    DeployDone d;
+    const bool hidden = e.type >= 0 && std::find(hidden_types.begin(), hidden_types.end(), e.type) != hidden_types.end();
+    collective::PairOutcome o;
+    if (e.type < 0) {
+      o = collective::run_alone(sim, agents[e.a], env_now, D.episode_steps);
+    } else {
+      sim::RunOptions opt;
+      opt.steps = D.episode_steps;
+      opt.record_hidden = hidden;
+      sim::RunResult full;
+      o = collective::run_pair(sim, agents[e.a], agents[e.b], weights[e.type][e.replicate], stiffness[e.type], env_now,
+                               opt, &full);
+      if (hidden) {
+        // the episode's stream: (seed, deploy + 1, the episode's index in every environment's list)
+        const uint64_t item = ((static_cast<uint64_t>(env_index) * T + e.type) * R + e.replicate) * NP + e.pair;
+        Rng rng = make_rng(cfg.run.seed, kDeployStage + 1, item);
+        d.hidden_index = sample_indices(rng, per_episode, K);
+        d.hidden.assign(d.hidden_index.size() * 32, std::numeric_limits<float>::quiet_NaN());
+        if (o.status == sim::Status::ok)
+          for (size_t k = 0; k < d.hidden_index.size(); ++k)
+            for (int q = 0; q < 32; ++q) d.hidden[k * 32 + q] = static_cast<float>(full.hidden[d.hidden_index[k] * 32 + q]);
+      }
+    }
+    d.done = EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
+    return pack(d);
   };
 
   const auto t_stage = std::chrono::steady_clock::now();
   for (int ei = done; ei < E; ++ei) {
     env_now = envs[ei];
+    env_index = ei;
     std::vector<std::string> items;
     if (rank == 0) {
       for (int i = 0; i < pop; ++i) items.push_back(pack(Episode{-1, 0, i, i}));
@@ -97,7 +149,7 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
         for (int r = 0; r < R; ++r)
           for (int q = 0; q < NP; ++q) {
             const auto& pr = diverse[t] ? diverse_pairs[q] : uniform_pairs[q];
-            items.push_back(pack(Episode{t, r, pr.first, pr.second}));
+            items.push_back(pack(Episode{t, r, pr.first, pr.second, q}));
           }
     }
     const FarmResult fr = farm(comm, items, compute);
@@ -107,10 +159,19 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     std::vector<uint8_t> as, cs;
     std::vector<double> type_mean(T, 0.0);
     std::vector<int> type_ok(T, 0), type_bad(T, 0);
+    std::vector<std::vector<float>> hid(hidden_types.size());
+    std::vector<std::vector<int32_t>> hid_index(hidden_types.size());
     if (rank == 0) {
       rows.push_back(ei);
       for (size_t q = 0; q < fr.results.size(); ++q) {
-        const EpisodeDone d = unpack<EpisodeDone>(fr.results[q]);
+        const DeployDone dd = unpack<DeployDone>(fr.results[q]);
+        const EpisodeDone& d = dd.done;
+        if (!dd.hidden_index.empty()) {
+          const int t = static_cast<int>((q - pop) / (static_cast<size_t>(R) * NP));
+          const int h = static_cast<int>(std::find(hidden_types.begin(), hidden_types.end(), t) - hidden_types.begin());
+          hid[h].insert(hid[h].end(), dd.hidden.begin(), dd.hidden.end());
+          hid_index[h].insert(hid_index[h].end(), dd.hidden_index.begin(), dd.hidden_index.end());
+        }
         const bool alone = q < static_cast<size_t>(pop);
         (alone ? au : cu).push_back(d.travel_u);
         (alone ? ab : cb).push_back(d.travel_bl);
@@ -129,6 +190,12 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     file.write_rows<double>("deploy/collectives/travel_u", {hE, hT, hR, hN}, rows, cu);
     file.write_rows<double>("deploy/collectives/travel_bl", {hE, hT, hR, hN}, rows, cb);
     file.write_rows<uint8_t>("deploy/collectives/status", {hE, hT, hR, hN}, rows, cs);
+    for (size_t h = 0; h < hidden_types.size(); ++h) {
+      const hsize_t hK = static_cast<hsize_t>(K);
+      file.write_rows<float>("deploy/hidden/" + types[hidden_types[h]] + "/states", {hE, hR, hN, hK, 32}, rows, hid[h]);
+      file.write_rows<int32_t>("deploy/hidden/" + types[hidden_types[h]] + "/index", {hE, hR, hN, hK}, rows,
+                               hid_index[h]);
+    }
     stage.write_int("envs_done", ei + 1);
     checkpoint();
     if (rank == 0) {

@@ -7,6 +7,11 @@
 //   diverse_pairs            (pairs × 2)            the fixed list of diverse deployment pairs
 //   agents/travel_bl, travel_u, status              (E × population)
 //   collectives/travel_bl, travel_u, status         (E × types × replicates × pairs)
+//   hidden/<type>/states     (E × replicates × pairs × K × 32, float32)  connector hidden states (SPEC §8.2)
+//   hidden/<type>/index      (E × replicates × pairs × K)  which: step · 5 + connector spring
+//     for the weak connectors deployed as trained (weak_uniform@uniform, weak_diverse@diverse); K =
+//     ceil(deploy.hidden_subsample / pairs) states per episode, drawn from the episode's own stream
+//     (seed, 3001, item), so at most hidden_subsample per (type, replicate, environment); NaN if not ok
 // status: 0 ok, 1 nan, 2 unstable; travel is NaN unless ok, and no summary averages over NaN.
 #pragma once
 

@@ -30,16 +30,22 @@ std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n) {
 
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
                      double stiffness, const std::string& env, int steps, bool grad) {
-  const sim::Scene s = pair_scene(P, A, params, stiffness, env);
   sim::RunOptions opt;
   opt.steps = steps;
   opt.grad = grad;
+  return run_pair(sim, P, A, params, stiffness, env, opt, nullptr);
+}
+
+PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
+                     double stiffness, const std::string& env, const sim::RunOptions& opt, sim::RunResult* full) {
+  const sim::Scene s = pair_scene(P, A, params, stiffness, env);
   sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;
   o.travel_u = r.travel;
   o.travel_bl = r.travel / (0.5 * (body_length(P) + body_length(A)));
-  if (grad) o.grad = std::move(r.grad_connector_params);
+  if (opt.grad) o.grad = std::move(r.grad_connector_params);
+  if (full) *full = std::move(r);
   return o;
 }
 

@@ -41,6 +41,12 @@ struct Element<double> {
   static constexpr const char* name = "float64";
 };
 template <>
+struct Element<float> {
+  static hid_t mem() { return H5T_NATIVE_FLOAT; }
+  static hid_t file() { return H5T_IEEE_F32LE; }
+  static constexpr const char* name = "float32";
+};
+template <>
 struct Element<int32_t> {
   static hid_t mem() { return H5T_NATIVE_INT32; }
   static hid_t file() { return H5T_STD_I32LE; }
@@ -311,7 +317,7 @@ std::string Node::read_string(const std::string& attr) const {
 
 template <class T>
 void Node::write(const std::string& path, const std::vector<T>& data, const Dims& dims) const {
-  static_assert(is_element<T>::value, "h5 datasets hold double, int32, int64 or uint8");
+  static_assert(is_element<T>::value, "h5 datasets hold double, float, int32, int64 or uint8");
   const std::string w = where(path);
   if (product(dims) != data.size())
     throw InputError(w + ": " + std::to_string(data.size()) + " values do not fill dims " +
@@ -398,7 +404,7 @@ Dims Node::dims(const std::string& path) const {
 
 template <class T>
 std::vector<T> Node::read(const std::string& path, Dims* dims_out) const {
-  static_assert(is_element<T>::value, "h5 datasets hold double, int32, int64 or uint8");
+  static_assert(is_element<T>::value, "h5 datasets hold double, float, int32, int64 or uint8");
   const std::string w = where(path);
   if (!has(path)) throw InputError(file_ + ": missing dataset " + path_of(path));
   Handle d(H5Dopen2(id(), path.c_str(), H5P_DEFAULT), H5Dclose);
@@ -419,7 +425,8 @@ std::vector<T> Node::read(const std::string& path, Dims* dims_out) const {
   const size_t n = static_cast<size_t>(product(dd));
   std::vector<T> out(n);
   if (n == 0) return out;
-  if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int64_t>) {
+  if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int64_t> || std::is_same_v<T, float>) {
+    // (a float read of a double dataset rounds to nearest, as a cast would)
     if (H5Dread(d.id(), Element<T>::mem(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
       fail(w, "cannot read the dataset");
   } else {
@@ -456,6 +463,7 @@ DIVCOLL_H5_INSTANTIATE(double)
 DIVCOLL_H5_INSTANTIATE(int32_t)
 DIVCOLL_H5_INSTANTIATE(int64_t)
 DIVCOLL_H5_INSTANTIATE(uint8_t)
+DIVCOLL_H5_INSTANTIATE(float)
 #undef DIVCOLL_H5_INSTANTIATE
 
 // ---- File --------------------------------------------------------------------------------------

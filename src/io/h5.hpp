@@ -58,6 +58,8 @@ template <>
 struct is_element<int64_t> : std::true_type {};
 template <>
 struct is_element<uint8_t> : std::true_type {};
+template <>
+struct is_element<float> : std::true_type {};
 
 // a file or a group: the object plus the names its error messages use
 class Node {

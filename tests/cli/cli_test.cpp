@@ -295,6 +295,37 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
     const double stored = f.read<double>(cases[c].dataset)[cases[c].index];
     EXPECT_EQ(io::h5::File::open(traj).read_double("travel"), stored) << cases[c].args;
   }
+  // hidden states (SPEC §8.2): K = 500 / 4 per episode, sorted distinct indices, and the very activations
+  // of the connector's second hidden layer at those steps (checked by rerunning one exported episode)
+  const hsize_t K = 125;
+  for (const char* type : {"weak_uniform@uniform", "weak_diverse@diverse"}) {
+    const std::string g = std::string("deploy/hidden/") + type;
+    const auto idx = f.read<int32_t>(g + "/index", D{E, R, NP, K});
+    const auto hs = f.read<float>(g + "/states", D{E, R, NP, K, 32});
+    for (size_t ep = 0; ep < E * R * NP; ++ep)
+      for (size_t k = 0; k < K; ++k) {
+        ASSERT_TRUE(idx[ep * K + k] >= 0 && idx[ep * K + k] < 200 * 5) << type;
+        if (k) ASSERT_LT(idx[ep * K + k - 1], idx[ep * K + k]) << type << " episode " << ep;
+      }
+    for (float h : hs) ASSERT_TRUE(h > -1.0f && h < 1.0f) << type << ": tanh activations";
+  }
+  {
+    const std::string scene = path("hid.h5");
+    ASSERT_EQ(run("export " + path("run.h5") + " --what pair --env ice --type weak_diverse@diverse --pair 2 --out " + scene).code, 0);
+    sim::Simulator sim;
+    sim::RunOptions opt;
+    opt.steps = 200;
+    opt.record_hidden = true;
+    const sim::RunResult rr = sim.run(io::read_scene(scene), opt);
+    const auto idx = f.read<int32_t>("deploy/hidden/weak_diverse@diverse/index");
+    const auto hs = f.read<float>("deploy/hidden/weak_diverse@diverse/states");
+    const size_t ep = (3 * R + 0) * NP + 2;  // ice, replicate 0, pair 2
+    for (size_t k = 0; k < K; ++k)
+      for (int q = 0; q < 32; ++q)
+        ASSERT_EQ(hs[(ep * K + k) * 32 + q], static_cast<float>(rr.hidden[static_cast<size_t>(idx[ep * K + k]) * 32 + q]))
+            << "state " << k << " unit " << q;
+  }
+
   const Exec nope = run("export " + path("run.h5") + " --what pair --env moon --out " + path("x.h5"));
   EXPECT_EQ(nope.code, 2);
   EXPECT_NE(nope.out.find("'moon' is not in the run file"), std::string::npos) << nope.out;
