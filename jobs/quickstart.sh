@@ -8,9 +8,7 @@ source jobs/mpi-env.sh
 bash jobs/build.sh
 mkdir -p out
 mpirun -np "$(nproc)" build/divcoll run configs/quick.toml --out out/quick.h5 --force
-/usr/bin/python3 postprocess/fig_s1.py out/quick.h5 --out out/figures
-/usr/bin/python3 postprocess/summary.py out/quick.h5 --out out/quick_summary.md
-/usr/bin/python3 postprocess/contact_sheet.py out/quick.h5 --divcoll build/divcoll --out out/figures
+/usr/bin/python3 postprocess/report.py out/quick.h5 --divcoll build/divcoll --out out/report
 build/divcoll demo --out out/demo
 echo
-echo "run file: out/quick.h5    summary: out/quick_summary.md    figures: out/figures/    demo scenes: out/demo/"
+echo "run file: out/quick.h5    report: out/report/report.md (figures in out/report/figures/)    demo scenes: out/demo/"

@@ -12,6 +12,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
+import claims  # noqa: E402
 import summary  # noqa: E402
 
 
@@ -58,6 +59,17 @@ class SummaryTest(unittest.TestCase):
         text = summary.summarize(self.path)
         self.assertIn("beating independent agents on flat: 1 of 2", text)
         self.assertIn("best type in the novel environments: weak_uniform@diverse (0.800 BL)", text)
+
+    def test_claims_follow_the_numbers_and_missing_stages_are_not_measured(self):
+        got = {text: (number, v) for text, number, v in claims.claims(self.path)}
+        by_start = lambda s: next(v for k, v in got.items() if k.startswith(s))  # noqa: E731
+        # weak_uniform@uniform (2.0 BL) beats agents alone (1.0 BL, the nan episode left out) on flat
+        number, v = by_start("Trained collectives of all four kinds")
+        self.assertEqual(v, "held")
+        self.assertIn("weak_uniform@uniform 2.00", number)
+        self.assertIn("agents alone 1.00", number)
+        self.assertEqual(by_start("Trained agents travel")[1], "not measured")  # no agents stage in the file
+        self.assertEqual(by_start("The advantage of diversity grows")[1], "not measured")
 
     def test_ok_mean_of_nothing_is_nan_not_zero(self):
         m, bad = summary.ok_mean([1.0, 2.0], [1, 2])

@@ -1,0 +1,218 @@
+"""The paper's claims, each tested against a run file's numbers.
+
+Each claim is a function of the run file returning (number text, verdict) where verdict is "held",
+"did not hold" or "not measured" (its stage is missing). Means are over ok episodes only, and "novel"
+means are means of per-environment means (summary.py). Used by report.py; `claims(path)` lists them.
+"""
+import h5py
+import numpy as np
+
+import summary
+
+
+def _s(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+class Run:
+    """the arrays the claims need, read once"""
+
+    def __init__(self, path):
+        self.path = path
+        with h5py.File(path, "r") as f:
+            self.has = {st: st in f and _s(f[st].attrs.get("status", "")) == "complete"
+                        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]}
+            self.fitness = f["agents/final/fitness"][()] if "agents/final" in f else None
+            self.gen0_untrained = None
+            if "agents/gen_000/curve_u" in f:
+                # travel before any gradient step, over the body length, of the random generation 0
+                c = f["agents/gen_000/curve_u"][()][:, 0]
+                fit, tu = f["agents/gen_000/fitness"][()], f["agents/gen_000/travel_u"][()]
+                bl = np.where(fit != 0, tu / np.where(fit == 0, 1, fit), np.nan)
+                self.gen0_untrained = c / bl
+            self.curves = {}
+            if "connectors" in f:
+                for kind in _s(f["connectors"].attrs.get("kinds", "")).split(","):
+                    if f"connectors/{kind}/curve_bl" in f:
+                        self.curves[kind] = np.nanmean(f[f"connectors/{kind}/curve_bl"][()], axis=1)
+            if self.has["deploy"]:
+                d = f["deploy"]
+                self.envs = _s(d.attrs["environments"]).split(",")
+                self.types = _s(d.attrs["types"]).split(",")
+                self.alone, _ = summary.env_means(d["agents/travel_bl"][()], d["agents/status"][()])
+                ct, cs = d["collectives/travel_bl"][()], d["collectives/status"][()]
+                self.coll = {t: summary.env_means(ct[:, i], cs[:, i])[0] for i, t in enumerate(self.types)}
+                self.novel = [i for i, e in enumerate(self.envs) if e != "flat"]
+                self.flat = self.envs.index("flat")
+            if self.has["specialists"]:
+                s = f["specialists"]
+                self.spec_envs = _s(s.attrs["environments"]).split(",")
+                t, st = s["travel_bl"][()], s["status"][()]
+                self.spec_best = np.array([np.nanmax([summary.ok_mean(t[e, r], st[e, r])[0] for r in range(t.shape[1])])
+                                           for e in range(t.shape[0])])
+            if self.has["scaling"]:
+                sc = f["scaling"]
+                self.sizes = list(sc["sizes"][()])
+                self.scale_envs = _s(sc.attrs["environments"]).split(",")
+                t, st = sc["travel_bl"][()], sc["status"][()]
+                nov = [i for i, e in enumerate(self.scale_envs) if e != "flat"]
+                self.scale = np.array([[np.mean(summary.env_means(t[:, si, v], st[:, si, v])[0][nov]) for v in range(2)]
+                                       for si in range(len(self.sizes))])
+            if self.has["graded"]:
+                self.graded = {}
+                genvs = _s(f["graded"].attrs["environments"]).split(",")
+                nov = [i for i, e in enumerate(genvs) if e != "flat"]
+                for pop in ["same_shape", "same_shape_springs"]:
+                    g = f[f"graded/{pop}"]
+                    a, _ = summary.env_means(g["deploy/agents/travel_bl"][()], g["deploy/agents/status"][()])
+                    p, _ = summary.env_means(g["deploy/pairs/travel_bl"][()], g["deploy/pairs/status"][()])
+                    self.graded[pop] = (np.mean(a[nov]), np.mean(p[nov]))
+
+    def novel_mean(self, arr):
+        return float(np.mean(arr[self.novel]))
+
+
+def f3(x):
+    return "—" if x is None or not np.isfinite(x) else f"{x:.2f}"
+
+
+def verdict(ok):
+    return "held" if ok else "did not hold"
+
+
+def c_agents_trained(r):
+    if r.fitness is None:
+        return "", "not measured"
+    txt = f"final population {f3(r.fitness.mean())} ± {f3(r.fitness.std())} BL"
+    if r.gen0_untrained is not None:
+        txt += f"; random untrained {f3(np.nanmean(r.gen0_untrained))} BL"
+    return txt, verdict(r.fitness.mean() >= 3.0 and (r.gen0_untrained is None or abs(np.nanmean(r.gen0_untrained)) < 0.5))
+
+
+def c_agents_drop(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    drops = {"agents alone": 1 - r.novel_mean(r.alone) / r.alone[r.flat]}
+    for t, m in r.coll.items():
+        drops[t] = 1 - r.novel_mean(m) / m[r.flat]
+    worst = max(drops, key=drops.get)
+    return (f"relative drop flat → novel: agents alone {drops['agents alone']:.0%}; largest: {worst} {drops[worst]:.0%}",
+            verdict(worst == "agents alone"))
+
+
+def c_untrained_drop(r):
+    if not r.curves or r.fitness is None:
+        return "", "not measured"
+    first = {k: c[0] for k, c in r.curves.items()}
+    txt = ", ".join(f"{k} {f3(v)}" for k, v in first.items()) + f" BL (batch mean before the first step) vs agents alone {f3(r.fitness.mean())} BL (1000 steps)"
+    return txt, verdict(all(v < 0.5 * r.fitness.mean() for v in first.values()))
+
+
+def c_trained_beat_alone(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    kinds = [t for t in r.types if t.split("@")[0].split("_")[1] == t.split("@")[1]]
+    txt = ", ".join(f"{t} {f3(r.coll[t][r.flat])}" for t in kinds) + f" vs agents alone {f3(r.alone[r.flat])} BL on flat"
+    return txt, verdict(all(r.coll[t][r.flat] > r.alone[r.flat] for t in kinds))
+
+
+def c_weak_diverse_best_flat(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    kinds = [t for t in r.types if t.split("@")[0].split("_")[1] == t.split("@")[1]]
+    best = max(kinds, key=lambda t: r.coll[t][r.flat])
+    return f"best on flat: {best} ({f3(r.coll[best][r.flat])} BL)", verdict(best == "weak_diverse@diverse")
+
+
+def c_all_drop_novel(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    worse = [t for t in r.types if r.novel_mean(r.coll[t]) < r.coll[t][r.flat]]
+    return f"{len(worse)} of {len(r.types)} types travel less in the novel environments", verdict(len(worse) == len(r.types))
+
+
+def c_weak_diverse_best_novel(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    best = max(r.types, key=lambda t: r.novel_mean(r.coll[t]))
+    return (f"best across the novel environments: {best} ({f3(r.novel_mean(r.coll[best]))} BL); weak_diverse@diverse "
+            f"{f3(r.novel_mean(r.coll['weak_diverse@diverse']))}, agents alone {f3(r.novel_mean(r.alone))}"), \
+        verdict(best == "weak_diverse@diverse")
+
+
+def c_transplant(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    dd, du = r.coll["weak_diverse@diverse"][r.flat], r.coll["weak_diverse@uniform"][r.flat]
+    uu, ud = r.coll["weak_uniform@uniform"][r.flat], r.coll["weak_uniform@diverse"][r.flat]
+    ok = (dd - du) < 0.25 * abs(dd) and ud < uu
+    return (f"flat: weak diverse-trained on diverse {f3(dd)} / on clones {f3(du)}; weak uniform-trained on clones "
+            f"{f3(uu)} / on diverse {f3(ud)} BL"), verdict(ok)
+
+
+def c_weak_diverse_most_envs(r):
+    if not r.has["deploy"]:
+        return "", "not measured"
+    weak = [t for t in r.types if t.startswith("weak")]
+    wins = sum(1 for e in r.novel if max(weak, key=lambda t: r.coll[t][e]) == "weak_diverse@diverse")
+    beats = sum(1 for e in r.novel if r.coll["weak_diverse@diverse"][e] > r.alone[e])
+    return (f"weak_diverse@diverse best of the weak types in {wins} of {len(r.novel)} novel environments, above agents "
+            f"alone in {beats}"), verdict(wins > len(r.novel) / 2 and beats > len(r.novel) / 2)
+
+
+def c_specialists(r):
+    if not (r.has["specialists"] and r.has["deploy"]):
+        return "", "not measured"
+    gen = np.array([r.coll["weak_diverse@diverse"][r.envs.index(e)] for e in r.spec_envs])
+    better = [e for e, g, s in zip(r.spec_envs, gen, r.spec_best) if g > s]
+    return (f"the generalist beats the best specialist in {len(better)} of {len(r.spec_envs)} environments"
+            + (f" ({', '.join(better)})" if better else "")), verdict(len(better) >= 1)
+
+
+def c_scaling(r):
+    if not r.has["scaling"]:
+        return "", "not measured"
+    adv = r.scale[:, 1] - r.scale[:, 0]
+    txt = "; ".join(f"N={n}: diverse − uniform {adv[i]:+.2f} BL" for i, n in enumerate(r.sizes))
+    return txt, verdict(all(np.diff(adv) > 0) and adv[-1] > 0)
+
+
+def c_graded(r):
+    if not (r.has["graded"] and r.has["deploy"]):
+        return "", "not measured"
+    main = (r.novel_mean(r.alone), r.novel_mean(r.coll["weak_diverse@diverse"]))
+    rows = [("main", main)] + list(r.graded.items())
+    gains = [p - a for _, (a, p) in rows]
+    txt = "; ".join(f"{n}: pairs − alone {g:+.2f} BL" for (n, _), g in zip(rows, gains))
+    return txt, verdict(gains[0] > gains[1] > gains[2])
+
+
+CLAIMS = [
+    ("Trained agents travel almost 4 BL on flat; random ones about 0", c_agents_trained),
+    ("Independent agents suffer the greatest drop in the novel environments", c_agents_drop),
+    ("Untrained connectors cause a severe drop in behaviour", c_untrained_drop),
+    ("Trained collectives of all four kinds travel further than independent agents (flat)", c_trained_beat_alone),
+    ("Weak connectors trained and deployed with diversity do best on flat", c_weak_diverse_best_flat),
+    ("Every collective type travels less in the novel environments than on flat", c_all_drop_novel),
+    ("Weak connectors with diversity in training and deployment do best across the novel environments",
+     c_weak_diverse_best_novel),
+    ("Transplant: diverse-trained weak connectors lose little on clones; uniform-trained ones cannot exploit diversity",
+     c_transplant),
+    ("In most novel environments weak diverse collectives are best (of the weak types) and beat agents alone",
+     c_weak_diverse_most_envs),
+    ("Generalists sometimes beat specialists trained in the environment (Fig. S2)", c_specialists),
+    ("The advantage of diversity grows with collective size (Fig. 4)", c_scaling),
+    ("More sources of diversity give more resilience (Fig. S3)", c_graded),
+]
+
+
+def claims(path):
+    r = Run(path)
+    out = []
+    for text, fn in CLAIMS:
+        try:
+            number, v = fn(r)
+        except (KeyError, ValueError, IndexError) as e:
+            number, v = f"cannot evaluate: {e}", "not measured"
+        out.append((text, number, v))
+    return out

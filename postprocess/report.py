@@ -1,0 +1,93 @@
+#!/usr/bin/python3
+"""One self-contained Markdown page for a run file: provenance, the paper's claims beside this run's
+numbers with a verdict each, the summary tables, and every figure the postprocess scripts can draw.
+
+    /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll]
+
+Writes DIR/report.md and DIR/figures/*. A figure script that fails (for example because its stage is
+missing from the run file) is listed with its message instead of its figure; the page is still written.
+"""
+import argparse
+import glob
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import claims  # noqa: E402
+import summary  # noqa: E402
+
+# figure scripts, in the paper's order, with the arguments they take besides the run file and --out
+FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig4.py", []), ("fig_s2.py", []), ("fig_s3.py", []),
+           ("contact_sheet.py", ["--divcoll"])]
+
+
+def draw_figures(run, fig_dir, divcoll):
+    notes = []
+    for script, extra in FIGURES:
+        path = os.path.join(HERE, script)
+        if not os.path.exists(path):
+            notes.append(f"- `{script}`: not available in this version")
+            continue
+        args = [sys.executable, path, run, "--out", fig_dir]
+        if "--divcoll" in extra:
+            args += ["--divcoll", divcoll]
+        p = subprocess.run(args, capture_output=True, text=True)
+        if p.returncode != 0:
+            msg = (p.stderr.strip() or p.stdout.strip()).splitlines()
+            notes.append(f"- `{script}` drew nothing: {msg[-1] if msg else 'exit ' + str(p.returncode)}")
+    return notes
+
+
+def write_report(run, out_dir, divcoll):
+    fig_dir = os.path.join(out_dir, "figures")
+    os.makedirs(fig_dir, exist_ok=True)
+    notes = draw_figures(run, fig_dir, divcoll)
+    lines = [summary.summarize(run).replace("# divcoll run summary", "# divcoll report", 1), ""]
+    table = ["## The paper's claims beside this run", "",
+             "| claim | this run | verdict |", "|---|---|---|"]
+    verdicts = {"held": 0, "did not hold": 0, "not measured": 0}
+    for text, number, v in claims.claims(run):
+        verdicts[v] += 1
+        table.append(f"| {text} | {number} | **{v}** |")
+    table += ["", f"{verdicts['held']} held, {verdicts['did not hold']} did not hold, "
+                  f"{verdicts['not measured']} not measured.", ""]
+    # the claims go first, after the provenance paragraph
+    head, _, rest = lines[0].partition("\n\n| stage")
+    page = [head, "", *table, "## Stages and numbers", "", "| stage" + rest]
+    page += ["## Figures", ""]
+    pngs = sorted(glob.glob(os.path.join(fig_dir, "*.png")))
+    for png in pngs:
+        rel = os.path.relpath(png, out_dir)
+        page.append(f"### {os.path.splitext(os.path.basename(png))[0]}\n\n![{rel}]({rel})\n")
+    if notes:
+        page += ["Figures not drawn:", "", *notes, ""]
+    path = os.path.join(out_dir, "report.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(page) + "\n")
+    return path, len(pngs), verdicts
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", help="divcoll run file")
+    ap.add_argument("--out", default="out/report", help="output folder")
+    ap.add_argument("--divcoll", default=os.path.join(HERE, "..", "build", "divcoll"), help="the divcoll binary")
+    a = ap.parse_args(argv)
+    if not os.path.exists(a.run):
+        print(f"report: no such run file: {a.run}", file=sys.stderr)
+        return 2
+    try:
+        path, n, v = write_report(a.run, a.out, a.divcoll)
+    except (OSError, KeyError) as e:
+        print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
+        return 2
+    print(f"report: wrote {path} ({n} figures; claims: {v['held']} held, {v['did not hold']} did not hold, "
+          f"{v['not measured']} not measured)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
