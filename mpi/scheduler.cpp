@@ -1,5 +1,6 @@
 #include "mpi/scheduler.hpp"
 
+#include <chrono>
 #include <cstring>
 
 #include "mpi/protocol.hpp"
@@ -25,10 +26,28 @@ std::pair<int64_t, std::string> recv_bytes(MPI_Comm comm, const MPI_Status& st) 
   return {index, count >= static_cast<int>(sizeof index) ? buf.substr(sizeof index) : std::string()};
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 }  // namespace
+
+FarmClock& farm_clock() {
+  static FarmClock clock;
+  return clock;
+}
 
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt) {
+  const auto t_farm = std::chrono::steady_clock::now();
+  FarmClock& clock = farm_clock();
+  auto timed = [&](const std::string& item) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string r = compute(item);
+    clock.compute_s += seconds_since(t0);
+    ++clock.items;
+    return r;
+  };
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -70,7 +89,7 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
         // the master computes an item itself
         const int64_t i = next++;
         out.owner[i] = 0;
-        out.results[i] = compute(items[i]);
+        out.results[i] = timed(items[i]);
         ++done;
         if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
       } else {
@@ -85,11 +104,12 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
       MPI_Probe(0, MPI_ANY_TAG, comm, &st);
       auto [index, payload] = recv_bytes(comm, st);
       if (st.MPI_TAG == kRoundEnd) break;
-      out.results[index] = compute(payload);
+      out.results[index] = timed(payload);
       send_bytes(comm, 0, kResult, index, out.results[index]);
     }
   }
   MPI_Bcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm);
+  clock.farm_s += seconds_since(t_farm);
   return out;
 }
 

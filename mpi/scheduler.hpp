@@ -26,6 +26,14 @@ struct FarmResult {
   std::vector<std::string> results;
   std::vector<int> owner;
 };
+// this rank's running totals over every farm() call: seconds inside compute() and inside farm()
+// (the rest of a stage's wall time is the master's own work, I/O and checkpoints)
+struct FarmClock {
+  double compute_s = 0, farm_s = 0;
+  long items = 0;
+};
+FarmClock& farm_clock();
+
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt = {});
 
