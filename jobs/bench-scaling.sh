@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Scaling benchmark (prints; it is not a test): wall time per stage of one preset at 1, 2, 3, 4 ranks,
+# each rank's busy share, and the load imbalance, from the run files' attributes. Ranks beyond the
+# machine's cores are oversubscribed (said so in the table). Writes OUT/scaling.csv, OUT/scaling.md and
+# OUT/scaling.png (postprocess/fig_scaling.py).
+#   bash jobs/bench-scaling.sh [CONFIG=configs/quick.toml] [OUT=out/scaling] [RANKS="1 2 3 4"]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+CONFIG=${1:-configs/quick.toml}
+OUT=${2:-out/scaling}
+RANKS=${3:-1 2 3 4}
+source jobs/mpi-env.sh
+[ -x build/divcoll ] || bash jobs/build.sh
+mkdir -p "$OUT"
+cores=$(nproc)
+for n in $RANKS; do
+  echo "== $n rank(s)"
+  t0=$(date +%s.%N)
+  mpirun -np "$n" build/divcoll run "$CONFIG" run.progress_every_s=0 --out "$OUT/run_np$n.h5" --force \
+    | grep -E "^stage" || true
+  echo "total $(echo "$(date +%s.%N) - $t0" | bc -l | cut -c1-6) s"
+done
+/usr/bin/python3 postprocess/fig_scaling.py "$OUT" --cores "$cores"

@@ -1,0 +1,112 @@
+#!/usr/bin/python3
+"""Table and plot of a scaling benchmark (jobs/bench-scaling.sh): wall time per stage against ranks,
+speed-up, each stage's busy fraction and load imbalance, read from OUT/run_np<N>.h5.
+
+    /usr/bin/python3 postprocess/fig_scaling.py OUT [--cores C]
+
+Writes OUT/scaling.csv, OUT/scaling.md and OUT/scaling.png.
+"""
+import argparse
+import glob
+import os
+import re
+import sys
+
+import h5py
+import numpy as np
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]
+
+
+def _s(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def read(out):
+    rows = []
+    for path in glob.glob(os.path.join(out, "run_np*.h5")):
+        n = int(re.search(r"run_np(\d+)\.h5$", path).group(1))
+        with h5py.File(path, "r") as f:
+            for st in STAGES:
+                if st not in f or "wall_s_last_session" not in f[st].attrs:
+                    continue
+                g = f[st]
+                busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
+                wall = float(g.attrs["wall_s_last_session"])
+                rows.append(dict(ranks=n, stage=st, wall_s=wall,
+                                 busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
+                                 master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
+                                 imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan")))
+    return sorted(rows, key=lambda r: (r["ranks"], STAGES.index(r["stage"])))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", help="folder with run_np<N>.h5")
+    ap.add_argument("--cores", type=int, default=os.cpu_count(), help="cores of the machine (marks oversubscription)")
+    a = ap.parse_args(argv)
+    rows = read(a.out)
+    if not rows:
+        print(f"fig_scaling: no run_np<N>.h5 with stage timings in {a.out}", file=sys.stderr)
+        return 2
+    with open(os.path.join(a.out, "scaling.csv"), "w") as fh:
+        fh.write("ranks,stage,wall_s,busy_fraction,master_busy,imbalance\n")
+        for r in rows:
+            fh.write(f"{r['ranks']},{r['stage']},{r['wall_s']:.3f},{r['busy_fraction']:.3f},{r['master_busy']:.3f},"
+                     f"{r['imbalance']:.3f}\n")
+    ranks = sorted({r["ranks"] for r in rows})
+    stages = [s for s in STAGES if any(r["stage"] == s for r in rows)]
+    wall = {(r["ranks"], r["stage"]): r for r in rows}
+    md = ["| stage | " + " | ".join(f"{n} rank{'s' if n > 1 else ''}{' (oversubscribed)' if n > a.cores else ''}"
+                                     for n in ranks) + " |",
+          "|---|" + "---|" * len(ranks)]
+    for st in stages + ["total"]:
+        cells = []
+        for n in ranks:
+            if st == "total":
+                w = sum(wall[(n, s)]["wall_s"] for s in stages if (n, s) in wall)
+                base = sum(wall[(ranks[0], s)]["wall_s"] for s in stages if (ranks[0], s) in wall)
+                cells.append(f"**{w:.1f} s** (×{base / w:.2f})")
+            elif (n, st) in wall:
+                r = wall[(n, st)]
+                cells.append(f"{r['wall_s']:.1f} s, busy {r['busy_fraction']:.0%}, master {r['master_busy']:.0%}, "
+                             f"imbalance {r['imbalance']:.2f}")
+            else:
+                cells.append("—")
+        md.append(f"| {st} | " + " | ".join(cells) + " |")
+    with open(os.path.join(a.out, "scaling.md"), "w") as fh:
+        fh.write("\n".join(md) + "\n")
+    print("\n".join(md))
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4), dpi=100)
+    for st in stages:
+        ns = [n for n in ranks if (n, st) in wall]
+        w = [wall[(n, st)]["wall_s"] for n in ns]
+        ax1.plot(ns, w, "o-", label=st)
+        ax2.plot(ns, [w[0] / x for x in w], "o-", label=st)
+    ax2.plot(ranks, [min(n, a.cores) / ranks[0] for n in ranks], "k--", lw=0.8, label=f"ideal ({a.cores} cores)")
+    for ax in (ax1, ax2):
+        ax.set_xlabel("MPI ranks")
+        ax.set_xticks(ranks)
+        if ranks[-1] > a.cores:
+            ax.axvspan(a.cores + 0.5, ranks[-1] + 0.5, color="0.9", zorder=0)
+            if ax is ax2:
+                ax.text(a.cores + 0.6, ax.get_ylim()[1] * 0.95, "oversubscribed", fontsize=8, va="top")
+    ax1.set_ylabel("wall time per stage (s)")
+    ax1.set_yscale("log")
+    ax2.set_ylabel(f"speed-up over {ranks[0]} rank(s)")
+    ax1.legend(fontsize=8)
+    ax1.set_title("time per stage")
+    ax2.set_title("speed-up")
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "scaling.png"))
+    print(f"fig_scaling: wrote {os.path.join(a.out, 'scaling.png')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
