@@ -19,13 +19,18 @@ namespace {
 // copies src to dst through dst.tmp, fsyncs, renames: dst is always either the old or the new copy
 void atomic_copy(const std::string& src, const std::string& dst) {
   const std::string tmp = dst + ".tmp";
-  fs::copy_file(src, tmp, fs::copy_options::overwrite_existing);
-  const int fd = ::open(tmp.c_str(), O_RDONLY);
-  if (fd >= 0) {
-    ::fsync(fd);
+  try {
+    fs::copy_file(src, tmp, fs::copy_options::overwrite_existing);
+    const int fd = ::open(tmp.c_str(), O_RDONLY);
+    DIVCOLL_THROW_UNLESS(fd >= 0 && ::fsync(fd) == 0, "cannot sync " << tmp);
     ::close(fd);
+    fs::rename(tmp, dst);
+  } catch (...) {
+    // a half copy only takes the space a full disk lacks; the previous checkpoint stays as it was
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
   }
-  fs::rename(tmp, dst);
 }
 
 // one int from rank 0 to all
@@ -51,7 +56,13 @@ void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) 
       err = e.what();
     }
   }
-  if (!bcast_int(comm, ok)) throw InputError(msg() << "cannot write the checkpoint " << checkpoint_path(run_path) << ": " << err);
+  if (!bcast_int(comm, ok)) {
+    std::error_code ec;
+    const auto space = fs::space(fs::absolute(run_path).parent_path(), ec);
+    throw InputError(msg() << "cannot write the checkpoint " << checkpoint_path(run_path) << ": " << err << " ("
+                           << space.available / 1024 << " KiB free on its file system; the last checkpoint is "
+                           << "kept: free space and rerun with --resume)");
+  }
 }
 
 bool valid_run_file(const std::string& path, std::string* why) {
