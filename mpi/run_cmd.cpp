@@ -73,9 +73,15 @@ void derive_run_file(const std::string& base, const std::string& path, const std
       later = later || s == from;
       if (later && f.has(s)) DIVCOLL_THROW_UNLESS(H5Ldelete(f.id(), s.c_str(), H5P_DEFAULT) >= 0, "cannot drop " << s);
     }
-    for (const char* a : {"end_time", "resumed", "config"})
+    // the earlier stages' provenance is kept under base_*; the new stages' is this binary's
+    if (f.has_attribute("git_commit")) f.write_string("base_git_commit", f.read_string("git_commit"));
+    if (f.has_attribute("start_time")) f.write_string("base_start_time", f.read_string("start_time"));
+    for (const char* a : {"end_time", "resumed", "config", "git_commit", "start_time", "divcoll_version"})
       if (f.has_attribute(a)) H5Adelete(f.id(), a);
     f.write_string("config", toml);
+    f.write_string("git_commit", git_commit());
+    f.write_string("divcoll_version", DIVCOLL_VERSION);
+    f.write_string("start_time", now_iso());
     f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
     f.close();
   }

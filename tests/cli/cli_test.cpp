@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "common/version.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "io/h5.hpp"
@@ -349,6 +350,8 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
       << "deploy reran with 100 steps instead of 200";
   EXPECT_FALSE(g.has("specialists")) << "stages from --from on are dropped from the copy";
   EXPECT_NE(g.read_string("derived_from").find("run.h5"), std::string::npos);
+  EXPECT_TRUE(g.has_attribute("base_git_commit")) << "the earlier stages' commit is kept";
+  EXPECT_EQ(g.read_string("git_commit"), git_commit()) << "the new stages' commit is this build's";
 }
 
 }  // namespace
