@@ -1,0 +1,515 @@
+"""Read-only access to the experiment stages of a divcoll run file, and the statistics the figures use.
+
+Used by fig2.py, fig4.py, fig_s2.py and fig_s3.py. Layout read here (README "Run-file layout",
+mpi/deploy_stage.hpp, mpi/later_stages.hpp):
+
+    /deploy        attributes environments (flat first), types, envs_done, status
+                   agents/{travel_bl,status} (E × P); collectives/{travel_bl,status} (E × T × R × NP)
+    /scaling       attributes environments, envs_done, status; sizes (S)
+                   travel_bl, status (E × S × 2 × R × draws), variant 0 uniform, 1 diverse
+    /specialists   attributes environments (the novel ones), status; travel_bl, status (E_novel × R_s × NP)
+    /graded        attributes environments, populations, status; per population <p>/ (attributes status,
+                   diversity_sources): deploy/agents/{travel_bl,status} (E × P_g),
+                   deploy/pairs/{travel_bl,status} (E × R × NP)
+
+Statistics (SPEC §8.3). Only ok episodes enter a mean: status == 0 and a finite travel. Episodes that
+ended nan / unstable are counted (n_bad) and never averaged. Error bars:
+
+- `bootstrap_ci`: percentile bootstrap 95% CI of the mean over episodes, B = 1000 resamples, fixed seed
+  (BOOT_SEED), so the same numbers always give the same bars.
+- a mean over several environments is the mean of the per-environment means (every environment weighs
+  the same); its CI is a stratified bootstrap: episodes are resampled within each environment, the
+  resampled environment means are averaged, and the 2.5 / 97.5 percentiles of those averages are taken.
+- `sem`: standard error of the mean over episodes (sample sd / sqrt(n)), for the figures whose caption
+  asks for it (Fig. S2).
+
+A stage that is missing (or has no finished environment) raises StageMissing, a RunFileError whose
+message reads like "run file has no scaling stage (run the scaling stage first)"; the scripts print it
+and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .runfile import RunFileError, RunMeta, _decode, _open, _meta
+
+BOOT_RESAMPLES = 1000
+BOOT_SEED = 0
+CI_LEVEL = 0.95
+FLAT = "flat"
+
+# what a deployment type means, for legends: "<kind>@<deployed on>"
+KIND_LABEL = {
+    "weak_uniform": "weak, uniform-trained",
+    "weak_diverse": "weak, diverse-trained",
+    "strong_uniform": "strong, uniform-trained",
+    "strong_diverse": "strong, diverse-trained",
+}
+
+
+class StageMissing(RunFileError):
+    """The run file lacks the stage (or the part of it) a figure needs."""
+
+
+# ---------------------------------------------------------------------------------------------------
+# statistics
+
+
+def ok_values(travel, status) -> np.ndarray:
+    """1-D array of the travels of the ok episodes (status == 0 and finite travel), in storage order."""
+    travel = np.asarray(travel, dtype=float)
+    status = np.asarray(status)
+    if travel.shape != status.shape:
+        raise ValueError(f"travel {travel.shape} and status {status.shape} differ in shape")
+    ok = (status == 0) & np.isfinite(travel)
+    return travel[ok].ravel()
+
+
+def n_not_ok(travel, status) -> int:
+    travel = np.asarray(travel, dtype=float)
+    return int(((np.asarray(status) != 0) | ~np.isfinite(travel)).sum())
+
+
+def ok_mean(travel, status) -> Tuple[float, int]:
+    """(mean over ok episodes, count of not-ok episodes); the mean is NaN when no episode is ok."""
+    v = ok_values(travel, status)
+    return (float(v.mean()) if v.size else float("nan")), n_not_ok(travel, status)
+
+
+def sem(values) -> float:
+    """Standard error of the mean (sample sd / sqrt(n)); 0 for one value, NaN for none."""
+    v = np.asarray(values, dtype=float).ravel()
+    if v.size == 0:
+        return float("nan")
+    if v.size == 1:
+        return 0.0
+    return float(v.std(ddof=1) / np.sqrt(v.size))
+
+
+def _boot_means(values: np.ndarray, rng: np.random.Generator, n_boot: int) -> np.ndarray:
+    n = values.size
+    out = np.empty(n_boot)
+    chunk = max(1, int(4_000_000 // max(n, 1)))  # keep the index matrix small at paper scale
+    for s in range(0, n_boot, chunk):
+        b = min(chunk, n_boot - s)
+        idx = rng.integers(0, n, size=(b, n))
+        out[s:s + b] = values[idx].mean(axis=1)
+    return out
+
+
+def bootstrap_ci(values, n_boot: int = BOOT_RESAMPLES, seed: int = BOOT_SEED,
+                 level: float = CI_LEVEL) -> Tuple[float, float]:
+    """Percentile bootstrap CI of the mean of `values` (already the ok episodes). (nan, nan) for none;
+    (v, v) for one value."""
+    return stratified_bootstrap_ci([values], n_boot=n_boot, seed=seed, level=level)
+
+
+def stratified_bootstrap_ci(groups: Sequence, n_boot: int = BOOT_RESAMPLES, seed: int = BOOT_SEED,
+                            level: float = CI_LEVEL) -> Tuple[float, float]:
+    """Percentile bootstrap CI of the mean of the group means, resampling within each group.
+    A group with no values makes the statistic undefined: (nan, nan)."""
+    groups = [np.asarray(g, dtype=float).ravel() for g in groups]
+    if not groups or any(g.size == 0 for g in groups):
+        return float("nan"), float("nan")
+    rng = np.random.default_rng(seed)
+    acc = np.zeros(n_boot)
+    for g in groups:
+        acc += _boot_means(g, rng, n_boot)
+    acc /= len(groups)
+    a = (1.0 - level) / 2.0
+    lo, hi = np.percentile(acc, [100 * a, 100 * (1 - a)])
+    return float(lo), float(hi)
+
+
+@dataclasses.dataclass
+class Stat:
+    """One bar or point: the mean (of environment means, when pooled over environments), its error bar
+    [lo, hi], the ok episodes behind it and the not-ok ones left out."""
+
+    mean: float
+    lo: float
+    hi: float
+    n_ok: int
+    n_bad: int
+    n_groups: int = 1  # environments averaged
+
+    @property
+    def yerr(self) -> Tuple[float, float]:
+        """(below, above) for matplotlib's yerr; 0 when undefined."""
+        if not (np.isfinite(self.mean) and np.isfinite(self.lo) and np.isfinite(self.hi)):
+            return 0.0, 0.0
+        return max(self.mean - self.lo, 0.0), max(self.hi - self.mean, 0.0)
+
+
+def stat(groups: Sequence[Tuple[np.ndarray, np.ndarray]], err: str = "ci",
+         n_boot: int = BOOT_RESAMPLES, seed: int = BOOT_SEED) -> Stat:
+    """Mean of the per-group ok means of [(travel, status), ...] (one group per environment) with its
+    error bar: err = "ci" (percentile bootstrap 95%, stratified by group) or "sem" (one group only:
+    mean ± standard error; several groups: sqrt(sum SEM_e²)/E, the SEM of a mean of independent means)."""
+    vals = [ok_values(t, s) for t, s in groups]
+    bad = sum(n_not_ok(t, s) for t, s in groups)
+    n_ok = int(sum(v.size for v in vals))
+    if not vals or any(v.size == 0 for v in vals):
+        return Stat(float("nan"), float("nan"), float("nan"), n_ok, bad, len(vals))
+    m = float(np.mean([v.mean() for v in vals]))
+    if err == "ci":
+        lo, hi = stratified_bootstrap_ci(vals, n_boot=n_boot, seed=seed)
+    elif err == "sem":
+        e = float(np.sqrt(sum(sem(v) ** 2 for v in vals)) / len(vals))
+        lo, hi = m - e, m + e
+    else:
+        raise ValueError(f"unknown error bar {err!r}")
+    return Stat(m, lo, hi, n_ok, bad, len(vals))
+
+
+# ---------------------------------------------------------------------------------------------------
+# reading
+
+
+def _s(v) -> str:
+    v = _decode(v)
+    return v if isinstance(v, str) else str(v)
+
+
+def _list_attr(g, name: str, where: str) -> List[str]:
+    if name not in g.attrs:
+        raise RunFileError(f"{where}: attribute '{name}' missing")
+    return [x for x in _s(g.attrs[name]).split(",") if x]
+
+
+def _require_stage(f, path, stage: str):
+    import h5py
+
+    if stage not in f or not isinstance(f[stage], h5py.Group):
+        raise StageMissing(f"{path}: run file has no {stage} stage (run the {stage} stage first)")
+    return f[stage]
+
+
+def _dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None) -> np.ndarray:
+    import h5py
+
+    if name not in f or not isinstance(f[name], h5py.Dataset):
+        stage = name.split("/")[0]
+        st = _s(f[stage].attrs.get("status", "?")) if stage in f else "absent"
+        raise StageMissing(f"{path}: /{name} missing (the {stage} stage has status '{st}': "
+                           f"run the {stage} stage to the end first)")
+    d = f[name]
+    if shape is not None and tuple(d.shape) != tuple(shape):
+        raise RunFileError(f"{path}: /{name} has shape {d.shape}, expected {tuple(shape)}")
+    return d[()]
+
+
+def _envs_done(g, n: int) -> int:
+    if "envs_done" in g.attrs:
+        return max(0, min(n, int(_decode(g.attrs["envs_done"]))))
+    return n if _s(g.attrs.get("status", "")) == "complete" else 0
+
+
+def _config(meta: RunMeta) -> dict:
+    if not meta.config:
+        return {}
+    try:
+        import tomllib
+
+        return tomllib.loads(meta.config)
+    except Exception:
+        return {}
+
+
+def config_value(meta: RunMeta, section: str, key: str, default=None):
+    """A key of the run's stored (resolved) config, or `default`."""
+    return _config(meta).get(section, {}).get(key, default)
+
+
+def _env_index(envs: List[str]) -> Dict[str, int]:
+    return {e: i for i, e in enumerate(envs)}
+
+
+@dataclasses.dataclass
+class Deploy:
+    """/deploy, cut to the environments that are done. Environments in run-file order, flat first."""
+
+    envs: List[str]
+    types: List[str]
+    agents_travel: np.ndarray  # (E, P) BL
+    agents_status: np.ndarray  # (E, P)
+    coll_travel: np.ndarray  # (E, T, R, NP) BL
+    coll_status: np.ndarray  # (E, T, R, NP)
+    envs_total: int
+    status: str
+    diverse_pairs: Optional[np.ndarray] = None
+
+    @property
+    def novel(self) -> List[str]:
+        return [e for e in self.envs if e != FLAT]
+
+    @property
+    def replicates(self) -> int:
+        return int(self.coll_travel.shape[2])
+
+    @property
+    def pairs(self) -> int:
+        return int(self.coll_travel.shape[3])
+
+    def agents(self, env: str) -> Tuple[np.ndarray, np.ndarray]:
+        """(travel, status) of every agent alone in `env`."""
+        e = self.envs.index(env)
+        return self.agents_travel[e], self.agents_status[e]
+
+    def collective(self, type_: str, env: str) -> Tuple[np.ndarray, np.ndarray]:
+        """(travel, status) (R × NP) of deployment type `type_` ("<kind>@uniform|diverse") in `env`."""
+        if type_ not in self.types:
+            raise StageMissing(f"deployment type {type_} is not in this run file (types: {', '.join(self.types)})")
+        e, t = self.envs.index(env), self.types.index(type_)
+        return self.coll_travel[e, t], self.coll_status[e, t]
+
+    def agents_stat(self, envs: Sequence[str], err: str = "ci", **kw) -> Stat:
+        return stat([self.agents(e) for e in envs], err=err, **kw)
+
+    def collective_stat(self, type_: str, envs: Sequence[str], err: str = "ci", **kw) -> Stat:
+        return stat([self.collective(type_, e) for e in envs], err=err, **kw)
+
+
+def load_deploy(path) -> Deploy:
+    with _open(path) as f:
+        g = _require_stage(f, path, "deploy")
+        where = f"{path}: /deploy"
+        envs = _list_attr(g, "environments", where)
+        types = _list_attr(g, "types", where)
+        done = _envs_done(g, len(envs))
+        if done == 0:
+            raise StageMissing(f"{path}: the deploy stage has no finished environment yet "
+                               f"(status '{_s(g.attrs.get('status', '?'))}'; run the deploy stage first)")
+        at = _dataset(f, path, "deploy/agents/travel_bl")
+        ast = _dataset(f, path, "deploy/agents/status", at.shape)
+        ct = _dataset(f, path, "deploy/collectives/travel_bl")
+        cst = _dataset(f, path, "deploy/collectives/status", ct.shape)
+        if at.ndim != 2 or at.shape[0] != len(envs):
+            raise RunFileError(f"{where}/agents/travel_bl: shape {at.shape}, expected ({len(envs)}, population)")
+        if ct.ndim != 4 or ct.shape[0] != len(envs) or ct.shape[1] != len(types):
+            raise RunFileError(f"{where}/collectives/travel_bl: shape {ct.shape}, expected "
+                               f"({len(envs)}, {len(types)}, replicates, pairs)")
+        dp = f["deploy/diverse_pairs"][()] if "deploy/diverse_pairs" in f else None
+        return Deploy(envs=envs[:done], types=types, agents_travel=at[:done], agents_status=ast[:done],
+                      coll_travel=ct[:done], coll_status=cst[:done], envs_total=len(envs),
+                      status=_s(g.attrs.get("status", "?")), diverse_pairs=dp)
+
+
+@dataclasses.dataclass
+class Scaling:
+    """/scaling, cut to the environments that are done."""
+
+    envs: List[str]
+    sizes: List[int]
+    travel: np.ndarray  # (E, S, 2, R, draws) BL; variant 0 uniform, 1 diverse
+    status: np.ndarray
+    envs_total: int
+    stage_status: str
+
+    VARIANTS = ("uniform", "diverse")
+
+    def chains(self, env: str, size: int, variant: str) -> Tuple[np.ndarray, np.ndarray]:
+        e, s, v = self.envs.index(env), self.sizes.index(int(size)), self.VARIANTS.index(variant)
+        return self.travel[e, s, v], self.status[e, s, v]
+
+    def stat(self, envs: Sequence[str], size: int, variant: str, err: str = "ci", **kw) -> Stat:
+        return stat([self.chains(e, size, variant) for e in envs], err=err, **kw)
+
+
+def load_scaling(path) -> Scaling:
+    with _open(path) as f:
+        g = _require_stage(f, path, "scaling")
+        where = f"{path}: /scaling"
+        envs = _list_attr(g, "environments", where)
+        done = _envs_done(g, len(envs))
+        if done == 0:
+            raise StageMissing(f"{path}: the scaling stage has no finished environment yet "
+                               f"(status '{_s(g.attrs.get('status', '?'))}'; run the scaling stage first)")
+        sizes = [int(x) for x in np.asarray(_dataset(f, path, "scaling/sizes")).ravel()]
+        t = _dataset(f, path, "scaling/travel_bl")
+        st = _dataset(f, path, "scaling/status", t.shape)
+        if t.ndim != 5 or t.shape[0] != len(envs) or t.shape[1] != len(sizes) or t.shape[2] != 2:
+            raise RunFileError(f"{where}/travel_bl: shape {t.shape}, expected "
+                               f"({len(envs)}, {len(sizes)}, 2, replicates, draws)")
+        return Scaling(envs=envs[:done], sizes=sizes, travel=t[:done], status=st[:done],
+                       envs_total=len(envs), stage_status=_s(g.attrs.get("status", "?")))
+
+
+@dataclasses.dataclass
+class Specialists:
+    envs: List[str]  # the novel environments, each specialist trained and deployed in its own
+    travel: np.ndarray  # (E_novel, R_s, NP) BL
+    status: np.ndarray
+    stage_status: str
+
+    def replicate_means(self, env: str) -> np.ndarray:
+        """(R_s,) ok-mean of each replicate in its environment (NaN when none of its episodes is ok)."""
+        e = self.envs.index(env)
+        return np.array([ok_mean(self.travel[e, r], self.status[e, r])[0] for r in range(self.travel.shape[1])])
+
+    def best(self, env: str) -> Tuple[int, float]:
+        """(replicate, ok-mean) of the best specialist of `env`: the highest ok-mean, ties to the lowest
+        index; (-1, nan) when no replicate has an ok episode."""
+        m = self.replicate_means(env)
+        if not np.isfinite(m).any():
+            return -1, float("nan")
+        r = int(np.nanargmax(m))
+        return r, float(m[r])
+
+    def best_stat(self, env: str, err: str = "sem", **kw) -> Tuple[int, Stat]:
+        r, _ = self.best(env)
+        e = self.envs.index(env)
+        if r < 0:
+            return r, Stat(float("nan"), float("nan"), float("nan"), 0, n_not_ok(self.travel[e], self.status[e]))
+        return r, stat([(self.travel[e, r], self.status[e, r])], err=err, **kw)
+
+
+def load_specialists(path) -> Specialists:
+    with _open(path) as f:
+        g = _require_stage(f, path, "specialists")
+        envs = _list_attr(g, "environments", f"{path}: /specialists")
+        t = _dataset(f, path, "specialists/travel_bl")
+        st = _dataset(f, path, "specialists/status", t.shape)
+        if t.ndim != 3 or t.shape[0] != len(envs):
+            raise RunFileError(f"{path}: /specialists/travel_bl: shape {t.shape}, expected "
+                               f"({len(envs)}, replicates, pairs)")
+        return Specialists(envs=envs, travel=t, status=st, stage_status=_s(g.attrs.get("status", "?")))
+
+
+@dataclasses.dataclass
+class GradedPopulation:
+    name: str
+    diversity_sources: List[str]
+    envs: List[str]
+    agents_travel: np.ndarray  # (E, P_g)
+    agents_status: np.ndarray
+    pairs_travel: np.ndarray  # (E, R, NP)
+    pairs_status: np.ndarray
+
+    def agents(self, env):
+        e = self.envs.index(env)
+        return self.agents_travel[e], self.agents_status[e]
+
+    def pairs(self, env):
+        e = self.envs.index(env)
+        return self.pairs_travel[e], self.pairs_status[e]
+
+    def agents_stat(self, envs, err="ci", **kw) -> Stat:
+        return stat([self.agents(e) for e in envs], err=err, **kw)
+
+    def pairs_stat(self, envs, err="ci", **kw) -> Stat:
+        return stat([self.pairs(e) for e in envs], err=err, **kw)
+
+
+# the main population's sources of diversity (SPEC §7.5: behaviour, springs, shape, pairing)
+MAIN_SOURCES = ["behaviour", "springs", "shape", "pairing"]
+DIVERSITY_SOURCES = ["behaviour", "springs", "shape", "pairing"]
+
+
+def main_population(dep: Deploy, type_: str = "weak_diverse@diverse") -> GradedPopulation:
+    """The main population as a graded setting: agents alone and `type_` collectives (E × R × NP)."""
+    if type_ not in dep.types:
+        raise StageMissing(f"deployment type {type_} is not in this run file (types: {', '.join(dep.types)})")
+    t = dep.types.index(type_)
+    return GradedPopulation(name="main", diversity_sources=list(MAIN_SOURCES), envs=list(dep.envs),
+                            agents_travel=dep.agents_travel, agents_status=dep.agents_status,
+                            pairs_travel=dep.coll_travel[:, t], pairs_status=dep.coll_status[:, t])
+
+
+def load_graded(path) -> List[GradedPopulation]:
+    """The graded populations in the order of /graded's `populations` attribute; a population whose
+    status is not complete raises StageMissing."""
+    import h5py
+
+    with _open(path) as f:
+        g = _require_stage(f, path, "graded")
+        where = f"{path}: /graded"
+        envs = _list_attr(g, "environments", where)
+        pops = _list_attr(g, "populations", where)
+        out = []
+        for p in pops:
+            if p not in g or not isinstance(g[p], h5py.Group):
+                raise StageMissing(f"{where}/{p} missing (the graded stage has status "
+                                   f"'{_s(g.attrs.get('status', '?'))}': run the graded stage to the end first)")
+            gp = g[p]
+            if _s(gp.attrs.get("status", "")) != "complete":
+                raise StageMissing(f"{where}/{p} has status '{_s(gp.attrs.get('status', '?'))}' "
+                                   f"(run the graded stage to the end first)")
+            base = f"graded/{p}/deploy"
+            at = _dataset(f, path, f"{base}/agents/travel_bl")
+            ast = _dataset(f, path, f"{base}/agents/status", at.shape)
+            pt = _dataset(f, path, f"{base}/pairs/travel_bl")
+            pst = _dataset(f, path, f"{base}/pairs/status", pt.shape)
+            if at.ndim != 2 or at.shape[0] != len(envs) or pt.ndim != 3 or pt.shape[0] != len(envs):
+                raise RunFileError(f"{where}/{p}/deploy: shapes {at.shape} and {pt.shape}, expected "
+                                   f"({len(envs)}, population) and ({len(envs)}, replicates, pairs)")
+            src = [x.strip() for x in _s(gp.attrs.get("diversity_sources", "")).split(",") if x.strip()]
+            out.append(GradedPopulation(name=p, diversity_sources=src, envs=envs, agents_travel=at,
+                                        agents_status=ast, pairs_travel=pt, pairs_status=pst))
+        return out
+
+
+def load_meta(path) -> RunMeta:
+    with _open(path) as f:
+        return _meta(f, path)
+
+
+def run_title(meta: RunMeta) -> str:
+    """'run "quick", seed 1, commit 9ab266a2c0d0' for figure titles."""
+    seed = meta.seed if meta.seed is not None else "?"
+    commit = meta.git_commit or "?"
+    return f"run \"{meta.name}\" (seed {seed}, commit {commit})"
+
+
+def error_bar_note(n_boot: int = BOOT_RESAMPLES, seed: int = BOOT_SEED) -> str:
+    return (f"error bars: 95% percentile bootstrap CI over episodes ({n_boot} resamples, seed {seed}; "
+            f"stratified by environment for means over environments)")
+
+
+# ---------------------------------------------------------------------------------------------------
+# the scripts' common command line
+
+
+def save(fig, out_dir: str, stem: str, dpi: int = 150, software: str = "divcoll") -> List[str]:
+    os.makedirs(out_dir, exist_ok=True)
+    paths = []
+    for ext in ("png", "pdf"):
+        p = os.path.join(out_dir, f"{stem}.{ext}")
+        fig.savefig(p, dpi=dpi, metadata=None if ext == "pdf" else {"Software": software})
+        paths.append(p)
+    return paths
+
+
+def parse_args(doc: str, argv=None, extra=None):
+    import argparse
+
+    ap = argparse.ArgumentParser(description=doc.strip().split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", help="divcoll run file (HDF5)")
+    ap.add_argument("--out", default=os.path.join("out", "figures"), help="output directory (default out/figures)")
+    ap.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
+    ap.add_argument("--boot", type=int, default=BOOT_RESAMPLES,
+                    help=f"bootstrap resamples (default {BOOT_RESAMPLES})")
+    ap.add_argument("--boot-seed", type=int, default=BOOT_SEED, help=f"bootstrap seed (default {BOOT_SEED})")
+    if extra:
+        extra(ap)
+    return ap.parse_args(argv)
+
+
+def run_script(name: str, draw, args) -> int:
+    """Call draw(args) -> list of written paths; RunFileError -> message on stderr, exit 2."""
+    import sys
+
+    try:
+        paths = draw(args)
+    except RunFileError as e:
+        print(f"{name}: {e}", file=sys.stderr)
+        return 2
+    for p in paths:
+        print(p)
+    return 0
