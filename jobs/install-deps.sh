@@ -10,6 +10,7 @@ PACKAGES=(
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
   python3-h5py python3-numpy python3-matplotlib python3-scipy
+  shellcheck slurmctld slurmd slurm-client munge
 )
 
 missing=()

@@ -1,0 +1,177 @@
+# shellcheck shell=bash
+# What the job scripts share (sourced by jobs/slurm/divcoll.sbatch, jobs/pbs/divcoll.pbs and
+# jobs/run-workstation.sh): load a machine profile, resolve the run's paths, and run
+# `divcoll run CONFIG --out OUT --resume` so that it can be stopped and continued without losing work.
+#
+# Stopping. divcoll has no signal handler: a killed run continues from its last checkpoint (OUT.ckpt, replaced
+# after every output.checkpoint_every generations or iterations) on --resume, bit-identically. So on the
+# "time is nearly up" signal (SIGUSR1: Slurm's --signal=B:USR1@T, or divcoll_arm_timer under PBS) the run is
+# stopped right after its next checkpoint, or after DIVCOLL_STOP_GRACE_S seconds (default 60) if none comes:
+# at most the work since the last checkpoint is lost, and the time is used up to the checkpoint. Keep the
+# grace well under the warning's lead (120 s): stopping and resubmitting take a few seconds more.
+# SIGTERM/SIGINT (scancel, qdel, Ctrl-C) are passed to the run, which then ends without a continuation.
+
+divcoll_log() { echo "[divcoll-job $(date -u +%FT%TZ)] $*"; }
+
+# sets DIVCOLL_ROOT to the first folder holding this repository's jobs/lib/resumable-run.sh
+divcoll_find_root() {
+  local d
+  for d in "$@"; do
+    if [ -n "$d" ] && [ -f "$d/jobs/lib/resumable-run.sh" ]; then
+      DIVCOLL_ROOT=$(cd "$d" && pwd)
+      return 0
+    fi
+  done
+  echo "divcoll-job: cannot find the divcoll repository (tried: $*); set DIVCOLL_ROOT" >&2
+  return 1
+}
+
+# sources a machine profile: a name in jobs/profiles/ (workstation, generic-cluster) or a file's path. The
+# profile sets DIVCOLL_RANKS, DIVCOLL_LAUNCH (the launcher's command line) and the MPI environment.
+divcoll_load_profile() {
+  local p=$1
+  [ -f "$p" ] || p="$DIVCOLL_ROOT/jobs/profiles/$1.sh"
+  if [ ! -f "$p" ]; then
+    echo "divcoll-job: no profile '$1' (jobs/profiles/*.sh or a file)" >&2
+    return 1
+  fi
+  # shellcheck source=/dev/null
+  source "$p"
+  divcoll_log "profile $p: $DIVCOLL_RANKS rank(s), launcher: $DIVCOLL_LAUNCH"
+}
+
+# an absolute path for CONFIG: as given, else relative to the repository
+divcoll_config_path() {
+  if [ -f "$1" ]; then
+    realpath "$1"
+  elif [ -f "$DIVCOLL_ROOT/$1" ]; then
+    realpath "$DIVCOLL_ROOT/$1"
+  else
+    echo "divcoll-job: no config file $1" >&2
+    return 1
+  fi
+}
+
+# "inode mtime" of a file, or "none": changes whenever a checkpoint is renamed into place
+_divcoll_stamp() { stat -c '%i %.9Y' "$1" 2>/dev/null || echo none; }
+
+# a sleep that a TERM trap can end (kill "$_divcoll_sp"), so that no orphaned sleep outlives the job
+_divcoll_sleep() {
+  sleep "$1" &
+  _divcoll_sp=$!
+  wait "$_divcoll_sp"
+}
+
+# trap handlers return 0 explicitly: a bare `return` in a handler gives the status of the interrupted `wait`
+# (> 128), and under `set -e` that ends the job script
+_divcoll_on_usr1() {
+  if [ "${DIVCOLL_CAN_CONTINUE:-0}" != 1 ]; then
+    divcoll_log "time-limit warning: no continuation can follow (${DIVCOLL_NO_CONTINUE_WHY:-no scheduler}); the run goes on until the limit"
+    return 0
+  fi
+  if [ -n "$_divcoll_stopper" ]; then
+    return 0
+  fi
+  DIVCOLL_STOPPED=1
+  local grace=${DIVCOLL_STOP_GRACE_S:-60} ckpt="$_divcoll_out.ckpt"
+  divcoll_log "time-limit warning: stopping the run after its next checkpoint (at most ${grace} s)"
+  (
+    # ended early (the run finished first): take the sleep along; a second warning changes nothing
+    trap 'kill "$_divcoll_sp" 2>/dev/null; exit 0' TERM
+    trap '' USR1
+    before=$(_divcoll_stamp "$ckpt")
+    end=$((SECONDS + grace))
+    while [ "$SECONDS" -lt "$end" ] && [ "$(_divcoll_stamp "$ckpt")" = "$before" ]; do _divcoll_sleep 0.5; done
+    if [ "$(_divcoll_stamp "$ckpt")" = "$before" ]; then
+      divcoll_log "no checkpoint within ${grace} s: stopping anyway (the run continues from the previous one)"
+    else
+      divcoll_log "checkpoint written: stopping the run"
+    fi
+    kill -TERM "$_divcoll_pid" 2>/dev/null || exit 0
+    _divcoll_sleep 30
+    kill -KILL "$_divcoll_pid" 2>/dev/null || true
+  ) &
+  _divcoll_stopper=$!
+  return 0
+}
+
+_divcoll_on_term() {
+  divcoll_log "SIGTERM/SIGINT: passing it to the run (no continuation)"
+  DIVCOLL_STOPPED=0
+  DIVCOLL_CAN_CONTINUE=0
+  kill -TERM "$_divcoll_pid" 2>/dev/null || true
+  return 0
+}
+
+# divcoll_run_resumable CONFIG OUT [section.key=value ...]: runs
+#   $DIVCOLL_LAUNCH $DIVCOLL_BIN run CONFIG --out OUT --resume [overrides]
+# and returns its exit status. Sets DIVCOLL_STOPPED=1 if it was stopped for a continuation (SIGUSR1 while
+# DIVCOLL_CAN_CONTINUE=1), 0 otherwise.
+divcoll_run_resumable() {
+  local config=$1 out=$2 rc=0
+  shift 2
+  local -a launch
+  read -ra launch <<< "${DIVCOLL_LAUNCH:-}"
+  _divcoll_out=$out
+  _divcoll_stopper=
+  # shellcheck disable=SC2034  # read by the job scripts
+  DIVCOLL_STOPPED=0
+  divcoll_log "${launch[*]} $DIVCOLL_BIN run $config --out $out --resume $*"
+  "${launch[@]}" "$DIVCOLL_BIN" run "$config" --out "$out" --resume "$@" &
+  _divcoll_pid=$!
+  trap _divcoll_on_usr1 USR1
+  trap _divcoll_on_term TERM INT
+  # a warning that came before the run started: job scripts begin with
+  #   trap '_divcoll_usr1_pending=1' USR1
+  # (SIGUSR1's default action would end the job script)
+  if [ "${_divcoll_usr1_pending:-0}" = 1 ]; then
+    _divcoll_usr1_pending=0
+    _divcoll_on_usr1
+  fi
+  # a trapped signal ends `wait` early (status > 128) while the run goes on: wait again
+  while :; do
+    rc=0
+    wait "$_divcoll_pid" || rc=$?
+    { [ "$rc" -le 128 ] || ! kill -0 "$_divcoll_pid" 2>/dev/null; } && break
+  done
+  trap - TERM INT
+  trap 'divcoll_log "time-limit warning after the run ended: ignored"' USR1
+  if [ -n "$_divcoll_stopper" ]; then
+    kill "$_divcoll_stopper" 2>/dev/null || true
+    wait "$_divcoll_stopper" 2>/dev/null || true
+  fi
+  divcoll_log "the run ended with status $rc"
+  return "$rc"
+}
+
+# divcoll_arm_timer SECONDS: sends SIGUSR1 to this shell after SECONDS (for schedulers without Slurm's
+# --signal); divcoll_disarm_timer cancels it
+divcoll_arm_timer() {
+  local s=$1 me=$$
+  (
+    trap 'kill "$_divcoll_sp" 2>/dev/null; exit 0' TERM
+    trap '' USR1
+    _divcoll_sleep "$s" && kill -USR1 "$me"
+  ) &
+  _divcoll_timer=$!
+  divcoll_log "time-limit warning armed: SIGUSR1 in $s s"
+}
+divcoll_disarm_timer() {
+  if [ -n "${_divcoll_timer:-}" ]; then
+    kill "$_divcoll_timer" 2>/dev/null || true
+    wait "$_divcoll_timer" 2>/dev/null || true
+    _divcoll_timer=
+  fi
+}
+
+# the environment of a resubmission: no variables of this job's allocation (SLURM_*, except the
+# scheduler's own configuration), so that the new job sees only its own
+divcoll_clean_env_args() {
+  local v
+  for v in $(compgen -A variable SLURM_); do
+    case $v in
+      SLURM_CONF | SLURM_CLUSTERS) ;;
+      *) printf '%s\n' -u "$v" ;;
+    esac
+  done
+}

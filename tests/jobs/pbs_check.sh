@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# The job scripts without a scheduler (Debian has no PBS; TOOLCHAIN.md §4):
+#  1. `bash -n` and shellcheck over every script in jobs/ and tests/jobs/;
+#  2. jobs/pbs/divcoll.pbs run as PBS would run it (PBS_NODEFILE listing localhost twice, PBS_O_WORKDIR,
+#     started from /) on tiny.toml: a complete run file;
+#  3. the walltime path: a PBS_WALLTIME that arms the script's own timer 1 s after the start (SIGUSR1), a
+#     stand-in qsub that records what it is given; the job must stop after a checkpoint and resubmit itself
+#     (qsub -V -W depend=afterany:<job>); the resubmitted job, run here with the variables qsub -V passes,
+#     ignores its own warning (no resubmissions left) and completes the run, which must equal a plain
+#     mpirun run of the same config.
+# Usage: pbs_check.sh DIVCOLL SOURCE_DIR. Exit 77 (skipped) if shellcheck is missing (the rest still runs).
+set -euo pipefail
+D=$1 SRC=$2
+OVR=(agents.population=10 agents.generations=12 agents.epochs=5 agents.episode_steps=1000)
+t_start=$SECONDS
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+fail() {
+  echo "pbs check FAILED: $*"
+  for f in "$W"/*.log; do
+    [ -f "$f" ] && { echo "---- $f (last 30 lines)"; tail -30 "$f"; }
+  done
+  exit 1
+}
+
+echo "== bash -n, shellcheck"
+cd "$SRC"
+mapfile -t scripts < <(find jobs tests/jobs -type f \( -name '*.sh' -o -name '*.sbatch' -o -name '*.pbs' \) | sort)
+for s in "${scripts[@]}"; do
+  bash -n "$s" || fail "bash -n $s"
+done
+echo "bash -n: ${#scripts[@]} scripts ok"
+have_shellcheck=1
+if command -v shellcheck > /dev/null 2>&1; then
+  # -s bash: sourced files without a shebang (jobs/mpi-env.sh); -x: follow `source` (paths from here)
+  shellcheck -x -s bash "${scripts[@]}" || fail "shellcheck found problems (above)"
+  echo "shellcheck: ${#scripts[@]} scripts clean"
+else
+  have_shellcheck=0
+  echo "shellcheck is missing (jobs/install-deps.sh installs it); the other checks still run"
+fi
+
+# a PBS job's environment: node file, submit folder, job id; never a Slurm job's
+printf 'localhost\nlocalhost\n' > "$W/nodefile"
+mkdir "$W/bin"
+cat > "$W/bin/qsub" << EOF
+#!/usr/bin/env bash
+# stand-in qsub: records its arguments and the variables the resubmitted job needs
+printf '%s\n' "\$@" > "$W/qsub.args"
+printf '%s\n' "CONFIG=\$CONFIG" "OUT=\$OUT" "DIVCOLL_OVERRIDES=\$DIVCOLL_OVERRIDES" \\
+  "DIVCOLL_RESUBMIT_COUNT=\$DIVCOLL_RESUBMIT_COUNT" > "$W/qsub.env"
+echo 1002.fake
+EOF
+chmod +x "$W/bin/qsub"
+pbs_job() {  # pbs_job LOG VAR=VALUE...: the PBS script as PBS runs it (from /, a copy-independent path)
+  local log=$1
+  shift
+  (cd / && env -u SLURM_JOB_ID PATH="$W/bin:$PATH" PBS_NODEFILE="$W/nodefile" PBS_O_WORKDIR="$W" \
+    PBS_JOBNAME=divcoll-pbs DIVCOLL_BIN="$D" DIVCOLL_PROFILE=generic-cluster "$@" \
+    timeout 120 bash "$SRC/jobs/pbs/divcoll.pbs") > "$W/$log" 2>&1
+}
+complete_run_file() {  # every stage complete, an end time, no checkpoint left
+  local g
+  for g in agents connectors deploy specialists scaling graded; do
+    h5dump -a "/$g/status" "$1" | grep -q '"complete"' || fail "$1: stage $g is not complete"
+  done
+  h5dump -a /end_time "$1" > /dev/null 2>&1 || fail "$1 has no end_time"
+  [ ! -e "$1.ckpt" ] || fail "$1: the checkpoint of a completed run is still there"
+}
+
+echo "== jobs/pbs/divcoll.pbs, tiny.toml, 2 ranks from PBS_NODEFILE"
+pbs_job pbs-tiny.log PBS_JOBID=1000.fake CONFIG=configs/tiny.toml OUT=tiny.h5 ||
+  fail "the PBS script failed on tiny.toml"
+grep -q "launcher: mpirun -np 2 --hostfile $W/nodefile" "$W/pbs-tiny.log" || fail "not launched from PBS_NODEFILE"
+grep -q "run on 2 rank(s)" "$W/pbs-tiny.log" || fail "not 2 ranks"
+complete_run_file "$W/tiny.h5"
+echo "tiny.toml: complete run file $W/tiny.h5 (OUT relative to PBS_O_WORKDIR)"
+
+echo "== walltime warning, stop after a checkpoint, resubmission"
+(
+  # shellcheck source=jobs/mpi-env.sh
+  source "$SRC/jobs/mpi-env.sh"
+  timeout 120 mpirun -np 2 "$D" run "$SRC/configs/tiny.toml" "${OVR[@]}" --out "$W/ref.h5" > "$W/ref.log" 2>&1
+) || fail "the reference run failed"
+walltime=(PBS_WALLTIME=121 DIVCOLL_STOP_BEFORE_S=120 DIVCOLL_MAX_RESUBMITS=1)
+pbs_job pbs-1.log PBS_JOBID=1001.fake "${walltime[@]}" CONFIG="$SRC/configs/tiny.toml" OUT="$W/run.h5" \
+  DIVCOLL_OVERRIDES="${OVR[*]}" || fail "job 1001 failed"
+grep -q "time-limit warning armed: SIGUSR1 in 1 s" "$W/pbs-1.log" || fail "job 1001 armed no timer"
+grep -q "checkpoint written: stopping the run" "$W/pbs-1.log" || fail "job 1001 did not stop at a checkpoint"
+grep -q "resubmitted as job 1002.fake" "$W/pbs-1.log" || fail "job 1001 did not resubmit itself"
+! h5dump -a /end_time "$W/run.h5" > /dev/null 2>&1 || fail "the warning came too late: job 1001 completed the run"
+for a in -V "depend=afterany:1001.fake" "walltime=0:02:01" divcoll-pbs "$SRC/jobs/pbs/divcoll.pbs"; do
+  grep -qxF -- "$a" "$W/qsub.args" || fail "qsub was not given $a: $(tr '\n' ' ' < "$W/qsub.args")"
+done
+grep -qxF "DIVCOLL_RESUBMIT_COUNT=1" "$W/qsub.env" || fail "resubmission count: $(cat "$W/qsub.env")"
+echo "job 1001 stopped after a checkpoint and ran: qsub $(tr '\n' ' ' < "$W/qsub.args")"
+rm "$W/qsub.args"
+
+mapfile -t passed < "$W/qsub.env"
+pbs_job pbs-2.log PBS_JOBID=1002.fake "${walltime[@]}" "${passed[@]}" || fail "job 1002 failed"
+grep -q "resuming" "$W/pbs-2.log" || fail "job 1002 did not resume the run"
+grep -q "no continuation can follow (resubmission 1 of at most 1)" "$W/pbs-2.log" ||
+  fail "job 1002 did not log its ignored warning"
+[ ! -e "$W/qsub.args" ] || fail "job 1002 resubmitted itself beyond DIVCOLL_MAX_RESUBMITS=1"
+complete_run_file "$W/run.h5"
+"$D" compare "$W/ref.h5" "$W/run.h5" || fail "the stopped and resubmitted run differs from the plain mpirun run"
+echo "job 1002 resumed and completed the run: identical to the plain run"
+
+if [ "$have_shellcheck" = 0 ]; then
+  echo "pbs checks SKIPPED in part: shellcheck is missing"
+  exit 77
+fi
+echo "pbs checks: passed in $((SECONDS - t_start)) s"

@@ -1,0 +1,215 @@
+#!/usr/bin/env bash
+# jobs/slurm/divcoll.sbatch on a real Slurm: a private single-node cluster on localhost (munged, slurmctld,
+# slurmd with a config in a temporary folder; TOOLCHAIN.md §4), a run of tiny.toml (made longer by overrides)
+# whose job gets the time-limit warning (SIGUSR1 to the batch shell, as --signal=B:USR1@120 sends it),
+# stops after a checkpoint and resubmits itself; the continuation ignores its own warning (no
+# resubmissions left) and completes the run, which must equal a plain mpirun run of the same config.
+# Usage: slurm_test.sh DIVCOLL SOURCE_DIR. Exit 77 (skipped) when Slurm is not installed or will not start.
+set -euo pipefail
+D=$1 SRC=$2
+export PATH=$PATH:/usr/sbin:/sbin
+OVR=(agents.population=10 agents.generations=12 agents.epochs=5 agents.episode_steps=1000)
+t_start=$SECONDS
+# every wait ends by this deadline, well inside ctest's TIMEOUT (which would kill the test without its cleanup)
+deadline=$((SECONDS + ${SLURM_TEST_BUDGET_S:-240}))
+# an end time $1 seconds from now, or the deadline if that comes first
+by() { echo $((SECONDS + $1 < deadline ? SECONDS + $1 : deadline)); }
+
+skip() {
+  echo "slurm test SKIPPED: $*"
+  exit 77
+}
+[ "$(id -u)" = 0 ] || skip "not root (the test starts munged, slurmctld and slurmd as root)"
+for c in munged munge unmunge slurmctld slurmd sbatch squeue scancel sinfo scontrol mpirun h5dump; do
+  command -v "$c" > /dev/null 2>&1 ||
+    skip "$c is missing; install Slurm with jobs/install-deps.sh (slurmctld slurmd slurm-client munge)"
+done
+
+W=$(mktemp -d)
+chmod 711 "$W"  # munged wants its socket's folders searchable by all
+export SLURM_CONF=$W/slurm.conf
+
+# is process $1 running (not gone, not a zombie waiting for PID 1 to reap it)?
+running() {
+  local st
+  st=$(ps -o stat= -p "$1" 2> /dev/null) || return 1
+  [[ $st != Z* ]]
+}
+# stop exactly the daemons started here, by the PIDs in their pid files (checking the process's name)
+stop_daemon() {
+  local pidfile=$1 name=$2 pid
+  [ -s "$pidfile" ] || return 0
+  pid=$(cat "$pidfile")
+  [ "$(cat "/proc/$pid/comm" 2> /dev/null)" = "$name" ] || return 0
+  kill "$pid" 2> /dev/null || return 0
+  for _ in $(seq 50); do
+    running "$pid" || return 0
+    sleep 0.1
+  done
+  kill -9 "$pid" 2> /dev/null || true
+}
+cleanup() {
+  set +e
+  # cancel what is left of the jobs (a failed test), so that no slurmstepd outlives slurmd
+  if [ -s "$W/slurmctld.pid" ] && running "$(cat "$W/slurmctld.pid")"; then
+    local jobs
+    jobs=$(squeue -h -o %i 2> /dev/null)
+    if [ -n "$jobs" ]; then
+      # shellcheck disable=SC2086
+      scancel $jobs
+      for _ in $(seq 100); do
+        [ -z "$(squeue -h -o %i 2> /dev/null)" ] && break
+        sleep 0.2
+      done
+    fi
+  fi
+  stop_daemon "$W/slurmd.pid" slurmd
+  stop_daemon "$W/slurmctld.pid" slurmctld
+  stop_daemon "$W/munge/munged.pid" munged
+  rm -rf "$W"
+}
+trap cleanup EXIT
+trap 'exit 1' TERM INT HUP
+
+fail() {
+  echo "slurm test FAILED: $*"
+  for f in "$W"/*.out "$W/log/slurmctld.log" "$W/log/slurmd.log"; do
+    [ -f "$f" ] && { echo "---- $f (last 40 lines)"; tail -40 "$f"; }
+  done
+  exit 1
+}
+
+echo "== munged (private socket and key)"
+mkdir -m 711 "$W/munge"
+mkdir -m 755 "$W/state" "$W/spool" "$W/log"
+mungekey -c -k "$W/munge/munge.key" 2> /dev/null ||
+  { dd if=/dev/urandom of="$W/munge/munge.key" bs=1 count=1024 status=none && chmod 600 "$W/munge/munge.key"; }
+sock=$W/munge/munge.socket
+munged --socket="$sock" --key-file="$W/munge/munge.key" --pid-file="$W/munge/munged.pid" \
+  --log-file="$W/munge/munged.log" --seed-file="$W/munge/munged.seed" ||
+  skip "munged would not start: $(tail -2 "$W/munge/munged.log" 2> /dev/null)"
+munge -n -S "$sock" | unmunge -S "$sock" > /dev/null || skip "munge credentials do not round-trip"
+
+echo "== slurmctld, slurmd (config in $W)"
+host=$(hostname -s)
+# two free ports, so that a Slurm already on this machine is left alone
+for _ in $(seq 20); do
+  port=$((20000 + RANDOM % 20000))
+  if ! ss -Hltn 2> /dev/null | grep -qE ":($port|$((port + 1)))\b"; then break; fi
+done
+node=$(slurmd -C | head -1)  # NodeName=<host> CPUs=... RealMemory=...
+cat > "$SLURM_CONF" << EOF
+ClusterName=divcolltest
+SlurmctldHost=$host(127.0.0.1)
+SlurmctldPort=$port
+SlurmdPort=$((port + 1))
+SlurmUser=root
+SlurmdUser=root
+AuthType=auth/munge
+CredType=cred/munge
+AuthInfo=socket=$sock
+MailProg=/bin/true
+StateSaveLocation=$W/state
+SlurmdSpoolDir=$W/spool
+SlurmctldPidFile=$W/slurmctld.pid
+SlurmdPidFile=$W/slurmd.pid
+SlurmctldLogFile=$W/log/slurmctld.log
+SlurmdLogFile=$W/log/slurmd.log
+ProctrackType=proctrack/linuxproc
+TaskPlugin=task/none
+SwitchType=switch/none
+SelectType=select/cons_tres
+SelectTypeParameters=CR_Core
+MpiDefault=pmix
+JobAcctGatherType=jobacct_gather/none
+AccountingStorageType=accounting_storage/none
+JobCompType=jobcomp/none
+ReturnToService=2
+SchedulerType=sched/backfill
+$node NodeAddr=127.0.0.1 State=UNKNOWN
+PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
+EOF
+slurmctld -f "$SLURM_CONF" || skip "slurmctld would not start: $(tail -3 "$W/log/slurmctld.log" 2> /dev/null)"
+slurmd -f "$SLURM_CONF" || skip "slurmd would not start: $(tail -3 "$W/log/slurmd.log" 2> /dev/null)"
+end=$(by 30)
+while [ "$SECONDS" -lt "$end" ] && [ "$(sinfo -h -o %t 2> /dev/null)" != idle ]; do sleep 0.2; done
+[ "$(sinfo -h -o %t 2> /dev/null)" = idle ] ||
+  skip "the node did not become idle in 30 s: $(sinfo -h 2>&1 | head -2) $(tail -3 "$W/log/slurmd.log")"
+echo "cluster up in $((SECONDS - t_start)) s: $(sinfo -h -o '%P %D %c %t')"
+
+echo "== reference: plain mpirun, 2 ranks"
+(
+  # shellcheck source=jobs/mpi-env.sh
+  source "$SRC/jobs/mpi-env.sh"
+  timeout "$((deadline - SECONDS))" mpirun -np 2 "$D" run "$SRC/configs/tiny.toml" "${OVR[@]}" --out "$W/ref.h5" > "$W/ref.log" 2>&1
+) || { cat "$W/ref.log"; fail "the reference run failed"; }
+
+echo "== sbatch jobs/slurm/divcoll.sbatch"
+cd "$W"
+export DIVCOLL_BIN=$D DIVCOLL_PROFILE=generic-cluster DIVCOLL_MAX_RESUBMITS=1 DIVCOLL_STOP_GRACE_S=60
+script=$SRC/jobs/slurm/divcoll.sbatch
+opts=(--ntasks=2 --time=10 --job-name=divcoll-test)
+sbatch --test-only "${opts[@]}" "$script" > /dev/null 2>&1 ||
+  fail "sbatch --test-only refuses the job: $(sbatch --test-only "${opts[@]}" "$script" 2>&1)"
+j1=$(sbatch --parsable "${opts[@]}" "$script" "$SRC/configs/tiny.toml" "$W/run.h5" "${OVR[@]}")
+j1=${j1%%;*}
+echo "job $j1 submitted"
+
+# waits until job $1 has left the queue (or fails after $2 seconds)
+wait_gone() {
+  local end
+  end=$(by "$2")
+  while [ -n "$(squeue -h -j "$1" -o %i 2> /dev/null)" ]; do
+    [ "$SECONDS" -lt "$end" ] || fail "job $1 still queued or running at $((SECONDS - t_start)) s of the test"
+    sleep 0.2
+  done
+}
+# the time-limit warning as Slurm sends it with --signal=B:USR1@120: SIGUSR1 to the batch shell only
+warn() { scancel --batch --signal=USR1 "$1"; }
+
+# the first checkpoint exists: the run is under way
+end=$(by 90)
+until [ -f "$W/run.h5.ckpt" ]; do
+  [ "$SECONDS" -lt "$end" ] || fail "no checkpoint after $((SECONDS - t_start)) s of the test"
+  [ -n "$(squeue -h -j "$j1" -o %i)" ] || fail "job $j1 ended before its first checkpoint"
+  sleep 0.1
+done
+warn "$j1"
+echo "job $j1: time-limit warning sent after the first checkpoint"
+wait_gone "$j1" 90
+j2=$(sed -n 's/.*resubmitted as job \([0-9]*\).*/\1/p' "$W/divcoll-test-$j1.out")
+[ -n "$j2" ] || fail "job $j1 did not resubmit itself"
+echo "job $j1 stopped and resubmitted itself as job $j2"
+
+# the continuation has no resubmission left: it logs its warning and runs on
+end=$(by 60)
+until grep -q -- "--resume" "$W/divcoll-test-$j2.out" 2> /dev/null; do
+  [ "$SECONDS" -lt "$end" ] || fail "job $j2 did not start the run in time"
+  sleep 0.2
+done
+sleep 1
+warn "$j2"
+wait_gone "$j2" 120
+[ -z "$(squeue -h -o %i)" ] || fail "jobs left in the queue: $(squeue -h)"
+
+echo "== checks"
+for j in "$j1" "$j2"; do
+  info=$(scontrol show job -o "$j")
+  state=$(grep -o ' JobState=[^ ]*' <<< "$info")$(grep -o ' ExitCode=[^ ]*' <<< "$info")
+  [ "$state" = " JobState=COMPLETED ExitCode=0:0" ] || fail "job $j:$state"
+done
+o1=$W/divcoll-test-$j1.out o2=$W/divcoll-test-$j2.out
+grep -q "stopping the run after its next checkpoint" "$o1" || fail "job $j1 did not act on the warning"
+grep -q "checkpoint written: stopping the run" "$o1" || fail "job $j1 did not stop at a checkpoint"
+! grep -q "run complete" "$o1" || fail "the warning came too late: job $j1 completed the run"
+grep -q "resuming" "$o2" || fail "job $j2 did not resume the run"
+grep -q "no continuation can follow" "$o2" || fail "job $j2 did not log its ignored warning"
+! grep -q "resubmitted" "$o2" || fail "job $j2 resubmitted itself beyond DIVCOLL_MAX_RESUBMITS=1"
+grep -q "run complete" "$o2" || fail "job $j2 did not complete the run"
+for g in agents connectors deploy specialists scaling graded; do
+  h5dump -a "/$g/status" "$W/run.h5" | grep -q '"complete"' || fail "stage $g is not complete in the run file"
+done
+h5dump -a /end_time "$W/run.h5" > /dev/null 2>&1 || fail "the run file has no end_time"
+[ ! -e "$W/run.h5.ckpt" ] || fail "the checkpoint of the completed run is still there"
+"$D" compare "$W/ref.h5" "$W/run.h5" || fail "the Slurm run differs from the plain mpirun run"
+echo "slurm: passed in $((SECONDS - t_start)) s (job $j1 stopped after a checkpoint, job $j2 resumed and completed)"
