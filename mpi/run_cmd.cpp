@@ -217,6 +217,9 @@ int run_main(int argc, char** argv, const RunArgs& args) {
       std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
                   args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
                   path.c_str());
+    if (rank == 0 && existing)
+      std::printf("resuming %s from its last checkpoint (resumed %lld time(s))\n", path.c_str(),
+                  static_cast<long long>(file.read_int("resumed")));
 
     using StageFn = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
     const std::vector<std::pair<std::string, StageFn>> stages = {

@@ -97,7 +97,11 @@ echo "job 1001 stopped after a checkpoint and ran: qsub $(tr '\n' ' ' < "$W/qsub
 rm "$W/qsub.args"
 
 mapfile -t passed < "$W/qsub.env"
-pbs_job pbs-2.log PBS_JOBID=1002.fake "${walltime[@]}" "${passed[@]}" || fail "job 1002 failed"
+# job 1002 may take under a second: a walltime equal to the lead makes its warning come at once, so that it
+# always arrives while the job runs (before the run starts it is held and handled when the run starts)
+pbs_job pbs-2.log PBS_JOBID=1002.fake PBS_WALLTIME=120 DIVCOLL_STOP_BEFORE_S=120 DIVCOLL_MAX_RESUBMITS=1 \
+  "${passed[@]}" || fail "job 1002 failed"
+grep -q "time-limit warning armed: SIGUSR1 in 0 s" "$W/pbs-2.log" || fail "job 1002 armed no immediate timer"
 grep -q "resuming" "$W/pbs-2.log" || fail "job 1002 did not resume the run"
 grep -q "no continuation can follow (resubmission 1 of at most 1)" "$W/pbs-2.log" ||
   fail "job 1002 did not log its ignored warning"

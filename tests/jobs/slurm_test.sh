@@ -187,8 +187,7 @@ until grep -q -- "--resume" "$W/divcoll-test-$j2.out" 2> /dev/null; do
   [ "$SECONDS" -lt "$end" ] || fail "job $j2 did not start the run in time"
   sleep 0.2
 done
-sleep 1
-warn "$j2"
+warn "$j2"  # held until the run has started if it comes earlier (the job script traps it from its first line)
 wait_gone "$j2" 120
 [ -z "$(squeue -h -o %i)" ] || fail "jobs left in the queue: $(squeue -h)"
 
