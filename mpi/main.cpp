@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   }
   r->add_option("--from", run.from,
                 "rerun this stage and the later ones on a copy of --base's earlier stages (written to --out)")
-      ->check(CLI::IsMember({"connectors", "deploy", "specialists", "scaling", "graded"}));
+      ->check(CLI::IsMember({"connectors", "deploy", "specialists", "scaling", "graded", "analysis"}));
   r->add_option("--base", run.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
   evo.agents_only = true;
 

@@ -15,6 +15,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "mpi/agents_stage.hpp"
+#include "mpi/analysis_stage.hpp"
 #include "mpi/checkpoint.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
@@ -225,7 +226,8 @@ int run_main(int argc, char** argv, const RunArgs& args) {
     const std::vector<std::pair<std::string, StageFn>> stages = {
         {"agents", run_agents_stage},           {"connectors", run_connectors_stage},
         {"deploy", run_deploy_stage},           {"specialists", run_specialists_stage},
-        {"scaling", run_scaling_stage},         {"graded", run_graded_stage}};
+        {"scaling", run_scaling_stage},         {"graded", run_graded_stage},
+        {"analysis", run_analysis_stage}};
     for (const auto& [name, fn] : stages) {
       if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
       if (file.has(name) && file.group(name).has_attribute("status") &&

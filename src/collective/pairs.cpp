@@ -65,14 +65,20 @@ PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agen
 }
 
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps) {
-  const sim::Scene s = agent_scene(a, env);
   sim::RunOptions opt;
   opt.steps = steps;
-  const sim::RunResult r = sim.run(s, opt);
+  return run_alone(sim, a, env, opt, nullptr);
+}
+
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
+                      sim::RunResult* full) {
+  const sim::Scene s = agent_scene(a, env);
+  sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;
   o.travel_u = r.travel;
   o.travel_bl = r.travel / body_length(a);
+  if (full) *full = std::move(r);
   return o;
 }
 

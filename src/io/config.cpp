@@ -83,8 +83,8 @@ std::string string_list(const std::vector<std::string>& v) {
   return out + "]";
 }
 
-const std::vector<std::string> kStages = {"agents",      "connectors", "deploy",
-                                          "specialists", "scaling",    "graded"};
+const std::vector<std::string> kStages = {"agents",  "connectors", "deploy",  "specialists",
+                                          "scaling", "graded",     "analysis"};
 const std::vector<std::string> kKinds = {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"};
 
 // every key of the run configuration, in file order; defaults are SPEC §4.4, §6.4, §7
@@ -204,6 +204,18 @@ const std::vector<Key>& schema() {
              DIVCOLL_FIELD(graded.enabled)),
         num("graded", "population", T::Int, "100", "[2, 100000]", "agents", "size of each graded population",
             DIVCOLL_FIELD(graded.population)),
+        // [analysis]
+        num("analysis", "dtw_every", T::Int, "10", "[1, 1e6]", "steps",
+            "behaviour frames for the DTW adversity: mass positions relative to the centre of mass every this many "
+            "steps (SPEC §8.1)", DIVCOLL_FIELD(analysis.dtw_every)),
+        num("analysis", "dtw_band", T::Double, "0.1", "[0, 1]", "",
+            "Sakoe-Chiba band radius of the DTW as a fraction of the series length", DIVCOLL_FIELD(analysis.dtw_band)),
+        num("analysis", "max_states", T::Int, "10000", "[10, 1e6]", "states",
+            "hidden states per environment in one PaCMAP fit (training + novel, SPEC §8.2)",
+            DIVCOLL_FIELD(analysis.max_states)),
+        num("analysis", "bootstrap_resamples", T::Int, "1000", "[100, 1e7]", "",
+            "resamples of the seeded percentile-bootstrap 95% CIs (SPEC §8.3)",
+            DIVCOLL_FIELD(analysis.bootstrap_resamples)),
         // [output]
         text("output", "dir", "\"runs\"", "directory of run files and checkpoints",
              DIVCOLL_FIELD(output.dir)),

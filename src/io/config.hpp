@@ -1,5 +1,5 @@
 // the run configuration of `divcoll evolve CONFIG` / `divcoll run CONFIG`: a TOML file with the sections
-// [run] [agents] [connectors] [deploy] [specialists] [scaling] [graded] [output].
+// [run] [agents] [connectors] [deploy] [specialists] [scaling] [graded] [analysis] [output].
 //
 // One schema table in config.cpp lists every key (type, default, allowed range or values, unit, doc);
 // parsing, checking, the resolved TOML echo, the flat key/value list for HDF5 attributes and the README
@@ -20,7 +20,7 @@ struct RunConfig {
     std::uint64_t seed{};  // run seed: every draw is seeded by (seed, stage, item)
     std::string name;      // run name, used in output file names
     std::vector<std::string>
-        stages;                 // stages to run, from agents connectors deploy specialists scaling graded
+        stages;                 // stages to run, from agents connectors deploy specialists scaling graded analysis
     double progress_every_s{};  // seconds between progress lines (0 = none)
     bool operator==(const Run&) const = default;
   };
@@ -82,6 +82,13 @@ struct RunConfig {
     int population{};  // agents per graded population
     bool operator==(const Graded&) const = default;
   };
+  struct Analysis {
+    int dtw_every{};           // steps between behaviour frames for the DTW adversity
+    double dtw_band{};         // Sakoe–Chiba band radius as a fraction of the series length
+    int max_states{};          // hidden states per environment in one PaCMAP fit
+    int bootstrap_resamples{};  // percentile-bootstrap resamples of the CIs
+    bool operator==(const Analysis&) const = default;
+  };
   struct Output {
     std::string dir;         // directory of run files
     int checkpoint_every{};  // generations / iterations between checkpoints
@@ -95,6 +102,7 @@ struct RunConfig {
   Specialists specialists;
   Scaling scaling;
   Graded graded;
+  Analysis analysis;
   Output output;
 
   bool operator==(const RunConfig&) const = default;
@@ -119,7 +127,7 @@ void validate(const RunConfig& cfg);
 
 // whether a stage runs: listed in run.stages (and, for "graded", graded.enabled)
 bool stage_enabled(const RunConfig& cfg, const std::string& stage);
-// the pipeline's stages in the order they run: agents connectors deploy specialists scaling graded
+// the pipeline's stages in the order they run: agents connectors deploy specialists scaling graded analysis
 const std::vector<std::string>& stage_names();
 
 // the fully resolved config as TOML, every key with its doc as a comment; parses back to `cfg`

@@ -274,6 +274,50 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const auto p0 = f.read<double>("graded/same_shape_springs/agents/final/params", D{GP, Pa});
   EXPECT_FALSE(std::equal(p0.begin(), p0.begin() + Pa, p0.begin() + Pa)) << "controllers from different seeds";
 
+  // analysis (SPEC §8): the re-simulated episodes reproduce deploy's travel bit for bit; a DTW per agent of
+  // every ok pair, zero-free (tethered agents move differently) and finite exactly where deploy's pair was ok
+  EXPECT_EQ(f.group("analysis").read_string("status"), "complete");
+  EXPECT_EQ(f.group("analysis").read_string("types"), "weak_uniform@uniform,weak_diverse@diverse");
+  EXPECT_EQ(f.group("analysis/adversity").read_int("deploy_mismatches"), 0);
+  const int type_index[2] = {0, 3};  // weak_uniform@uniform, weak_diverse@diverse among deploy's 8 types
+  for (int t = 0; t < 2; ++t) {
+    const std::string type = t == 0 ? "weak_uniform@uniform" : "weak_diverse@diverse";
+    const auto dtw = f.read<double>("analysis/adversity/" + type + "/dtw", D{E, R, NP, 2});
+    const auto ws = f.read<uint8_t>("analysis/adversity/" + type + "/worse_slot", D{E, R, NP});
+    for (hsize_t e = 0; e < E; ++e)
+      for (hsize_t q = 0; q < NP; ++q) {
+        const size_t k = e * NP + q;
+        const bool ok = st[((e * T + type_index[t]) * R) * NP + q] == 0;
+        for (int slot = 0; slot < 2; ++slot) {
+          EXPECT_EQ(std::isfinite(dtw[2 * k + slot]), ok) << type << " env " << e << " pair " << q;
+          if (ok) {
+            EXPECT_GT(dtw[2 * k + slot], 0.0) << type;
+          }
+        }
+        EXPECT_LE(ws[k], 1);
+      }
+    // the worse agent is the one that travelled less alone
+    const auto alone = f.read<double>("deploy/agents/travel_bl");
+    if (t == 1)
+      for (hsize_t e = 0; e < E; ++e)
+        for (hsize_t q = 0; q < NP; ++q) {
+          const double a0 = alone[e * P + pairs[2 * q]], a1 = alone[e * P + pairs[2 * q + 1]];
+          EXPECT_EQ(ws[e * NP + q], a1 < a0 ? 1 : 0);
+        }
+    const auto counts = f.read<int64_t>("analysis/familiarity/" + type + "/counts", D{EN, R, 6});
+    const auto ns = f.read<int64_t>("analysis/familiarity/" + type + "/n_states", D{EN, R, 2});
+    for (hsize_t k = 0; k < EN; ++k) {
+      // every state is in exactly one class; the classes' cells are what the states occupy
+      EXPECT_EQ(counts[k * 6] + counts[k * 6 + 1] + counts[k * 6 + 2], ns[k * 2] + ns[k * 2 + 1]) << type;
+      EXPECT_GT(ns[k * 2], 0) << type;
+      EXPECT_LE(ns[k * 2], 500) << "at most max_states (= hidden_subsample here) per environment";
+      EXPECT_EQ(counts[k * 6 + 3] > 0, counts[k * 6] > 0);
+    }
+    EXPECT_EQ(f.dims("analysis/familiarity/" + type + "/embedding"), (D{EN, R, 1000, 2}));
+  }
+  EXPECT_EQ(f.dims("analysis/adversity/summary"), (D{2, 2, 3}));
+  EXPECT_EQ(f.dims("analysis/familiarity/table"), (D{EN, 3, 3}));
+
   // export: the scene of a stored episode simulates to the stored travel, bit for bit
   struct Case {
     std::string args, dataset;
@@ -306,7 +350,9 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
     for (size_t ep = 0; ep < E * R * NP; ++ep)
       for (size_t k = 0; k < K; ++k) {
         ASSERT_TRUE(idx[ep * K + k] >= 0 && idx[ep * K + k] < 200 * 5) << type;
-        if (k) ASSERT_LT(idx[ep * K + k - 1], idx[ep * K + k]) << type << " episode " << ep;
+        if (k) {
+          ASSERT_LT(idx[ep * K + k - 1], idx[ep * K + k]) << type << " episode " << ep;
+        }
       }
     for (float h : hs) ASSERT_TRUE(h > -1.0f && h < 1.0f) << type << ": tanh activations";
   }

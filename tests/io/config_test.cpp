@@ -64,7 +64,11 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
   // and the defaults are the paper's counts
   const RunConfig& d = paper;
   EXPECT_EQ(d.run.seed, 1u);
-  EXPECT_EQ(d.run.stages.size(), 6u);
+  EXPECT_EQ(d.run.stages.size(), 7u);
+  EXPECT_EQ(d.analysis.dtw_every, 10);  // SPEC §8.1: every 10th step, band 10%
+  EXPECT_EQ(d.analysis.dtw_band, 0.1);
+  EXPECT_EQ(d.analysis.max_states, 10000);  // SPEC §8.2
+  EXPECT_EQ(d.analysis.bootstrap_resamples, 1000);  // SPEC §8.3
   EXPECT_EQ(d.agents.population, 100);
   EXPECT_EQ(d.agents.generations, 15);
   EXPECT_EQ(d.agents.epochs, 15);
@@ -101,7 +105,9 @@ TEST(ConfigPresets, QuickIsTheDemoScale) {
                               std::pair{q.specialists.replicates, p.specialists.replicates},
                               std::pair{q.specialists.iterations, p.specialists.iterations},
                               std::pair{q.scaling.draws, p.scaling.draws},
-                              std::pair{q.graded.population, p.graded.population}})
+                              std::pair{q.graded.population, p.graded.population},
+                              std::pair{q.deploy.hidden_subsample, p.deploy.hidden_subsample},
+                              std::pair{q.analysis.max_states, p.analysis.max_states}})
     EXPECT_LT(quick, paper);
   EXPECT_LE(q.connectors.episode_steps, p.connectors.episode_steps);
   EXPECT_LE(q.deploy.episode_steps, p.deploy.episode_steps);
@@ -156,6 +162,10 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "scaling.episode_steps",
                                              "graded.enabled",
                                              "graded.population",
+                                             "analysis.dtw_every",
+                                             "analysis.dtw_band",
+                                             "analysis.max_states",
+                                             "analysis.bootstrap_resamples",
                                              "output.dir",
                                              "output.checkpoint_every"};
   EXPECT_EQ(config_keys(), expected);

@@ -1,0 +1,56 @@
+// the analysis stage (SPEC §8): DTW adversity and PaCMAP familiarity of the weak connectors deployed as
+// trained (weak_uniform@uniform: clones; weak_diverse@diverse: the deployment's diverse pairs), with the
+// statistics of Fig. 3A and Table S1. It reads only the agents, connectors and deploy groups, so it can be
+// added to any finished run with `divcoll run CONFIG --from analysis --base RUN.h5 --out NEW.h5`.
+//
+// Adversity (§8.1), one task-farm round pair per environment (checkpoint after each):
+//   1. every agent alone, recorded: its behaviour = its 11 masses relative to its centre of mass every
+//      analysis.dtw_every steps (frames × 22), broadcast to every rank;
+//   2. every pair episode of the two types, recorded: for each of its two agents the DTW distance between
+//      the tethered and the independent behaviour — symmetric1, Euclidean local cost, Sakoe–Chiba band
+//      ceil(analysis.dtw_band · frames), divided by the warping path's length.
+//   Both rounds re-simulate deploy's episodes; their travel must equal deploy's bit for bit (counted in the
+//   attribute adversity/deploy_mismatches, printed if not 0).
+//   Worse / better agent: the one that travelled less / more alone in that environment. Clones (uniform pairs)
+//   tie; a tie makes the posterior agent the worse one (counted in adversity/<type>/ties).
+// Familiarity (§8.2), one round per novel environment (checkpoint after each): per type and replicate, the
+//   hidden states deploy recorded in flat and in the environment (ok episodes only; at most
+//   analysis.max_states per environment, a seeded subsample), one PaCMAP fit on both together, coordinates
+//   rounded half to even, each state counted as in a cell holding both / only training / only novel states.
+// Statistics (§8.3): per replicate the mean DTW of the worse and of the better agents over environments and
+//   pairs; over replicates the mean, a seeded percentile-bootstrap 95% CI, Welch's t-test between the types.
+//   Table S1: per novel environment, the counts' mean over replicates per type and Welch's p between them.
+//
+// Run file, group /analysis (attributes status, types, environments, novel_environments, dtw_envs_done,
+// familiarity_envs_done):
+//   adversity/<type>/dtw          (E × R × pairs × 2)  DTW per agent slot (0 posterior, 1 anterior); NaN
+//                                                      unless the pair and both agents alone were ok
+//   adversity/<type>/worse_slot   (E × R × pairs)      slot of the worse agent (uint8)
+//   adversity/replicate_means     (types × 2 × R)      mean DTW of the worse (0) / better (1) agents
+//   adversity/summary             (types × 2 × 3)      mean over replicates, CI low, CI high
+//   adversity/welch               (2 × 3)              worse / better: t, df, p (uniform vs diverse type)
+//   familiarity/<type>/counts     (novel E × R × 6)    states in both / train-only / novel-only cells, then
+//                                                      the cells: both / train-only / novel-only
+//   familiarity/<type>/n_states   (novel E × R × 2)    training and novel states in the fit
+//   familiarity/<type>/embedding  (novel E × R × 2·max_states × 2, float32)  the fit's 2-D coordinates:
+//                                                      training states first, then novel; NaN padding
+//   familiarity/table             (novel E × 3 × 3)    per count (both, train-only, novel-only): mean over
+//                                                      replicates of the diverse type, of the uniform type,
+//                                                      Welch's p (NaN when a type is missing)
+#pragma once
+
+#include <mpi.h>
+
+#include <functional>
+
+#include "io/config.hpp"
+#include "io/h5.hpp"
+
+namespace divcoll::mpi {
+
+inline constexpr uint64_t kAnalysisStage = 6000;
+
+void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                        const std::function<void()>& checkpoint);
+
+}  // namespace divcoll::mpi
