@@ -1,13 +1,17 @@
 """The paper's claims, each tested against a run file's numbers.
 
 Each claim is a function of the run file returning (number text, verdict) where verdict is "held",
-"did not hold" or "not measured" (its stage is missing). Means are over ok episodes only, and "novel"
-means are means of per-environment means (summary.py). Used by report.py; `claims(path)` lists them.
+"did not hold" or "not measured" (its stage is missing or not complete). Means are over ok episodes only, and
+"novel" means are means of per-environment means (summary.py). The claims of Fig. 3 and Table S1 read the
+analysis stage's stored statistics (divcoll_post/analysis.py); "significantly" means Welch's p < 0.05. Used by
+report.py; `claims(path)` lists them.
 """
 import h5py
 import numpy as np
 
 import summary
+from divcoll_post import analysis as A
+from divcoll_post.runfile import RunFileError
 
 
 def _s(v):
@@ -21,7 +25,7 @@ class Run:
         self.path = path
         with h5py.File(path, "r") as f:
             self.has = {st: st in f and _s(f[st].attrs.get("status", "")) == "complete"
-                        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]}
+                        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]}
             self.fitness = f["agents/final/fitness"][()] if "agents/final" in f else None
             self.gen0_untrained = None
             if "agents/gen_000/curve_u" in f:
@@ -67,6 +71,17 @@ class Run:
                     a, _ = summary.env_means(g["deploy/agents/travel_bl"][()], g["deploy/agents/status"][()])
                     p, _ = summary.env_means(g["deploy/pairs/travel_bl"][()], g["deploy/pairs/status"][()])
                     self.graded[pop] = (np.mean(a[nov]), np.mean(p[nov]))
+
+        # the analysis stage (Fig. 3, Table S1), read through divcoll_post.analysis once the file is closed
+        self.analysis, self.analysis_error = None, ""
+        if self.has["analysis"]:
+            try:
+                self.analysis = A.load_analysis(path)
+            except RunFileError as e:
+                self.analysis_error = f"cannot read the analysis stage: {e}"
+        else:
+            st, desc = A.analysis_status(path)
+            self.analysis_error = "no analysis stage in the run file" if st is None else desc
 
     def novel_mean(self, arr):
         return float(np.mean(arr[self.novel]))
@@ -187,6 +202,91 @@ def c_graded(r):
     return txt, verdict(gains[0] > gains[1] > gains[2])
 
 
+def g3(x):
+    return "—" if x is None or not np.isfinite(x) else f"{x:.3g}"
+
+
+def _adversity(r):
+    return r.analysis.adversity if r.analysis is not None else None
+
+
+def _familiarity(r):
+    return r.analysis.familiarity if r.analysis is not None else None
+
+
+def c_diverse_disrupted_more(r):
+    adv = _adversity(r)
+    if adv is None:
+        return r.analysis_error, "not measured"
+    m = {t: np.nanmean(adv.all_replicate_means(t)) for t in A.TYPES}
+    p = A.welch(adv.all_replicate_means(A.UNIFORM), adv.all_replicate_means(A.DIVERSE))[2]
+    return (f"mean DTW per step, all agents: diverse-trained {g3(m[A.DIVERSE])} u, uniform-trained {g3(m[A.UNIFORM])} u "
+            f"(Welch p = {g3(p)})"), verdict(m[A.DIVERSE] > m[A.UNIFORM])
+
+
+def c_worse_altered_more(r):
+    adv = _adversity(r)
+    if adv is None:
+        return r.analysis_error, "not measured"
+    txt = "; ".join(f"{'diverse' if t == A.DIVERSE else 'uniform'}-trained: worse {g3(adv.mean(t, A.WORSE))} u, "
+                    f"better {g3(adv.mean(t, A.BETTER))} u" for t in A.TYPES)
+    return txt, verdict(all(adv.mean(t, A.WORSE) > adv.mean(t, A.BETTER) for t in A.TYPES))
+
+
+def c_diverse_change_worse_more(r):
+    adv = _adversity(r)
+    if adv is None:
+        return r.analysis_error, "not measured"
+    d, u, p = adv.mean(A.DIVERSE, A.WORSE), adv.mean(A.UNIFORM, A.WORSE), adv.p(A.WORSE)
+    return (f"worse agents: diverse-trained {g3(d)} u vs uniform-trained {g3(u)} u, Welch p = {g3(p)} ({A.stars(p)})",
+            verdict(d > u and np.isfinite(p) and p < 0.05))
+
+
+def c_better_comparable(r):
+    adv = _adversity(r)
+    if adv is None:
+        return r.analysis_error, "not measured"
+    d, u, p = adv.mean(A.DIVERSE, A.BETTER), adv.mean(A.UNIFORM, A.BETTER), adv.p(A.BETTER)
+    if not np.isfinite(p):
+        return f"better agents: diverse-trained {g3(d)} u vs uniform-trained {g3(u)} u, no Welch p", "not measured"
+    return (f"better agents: diverse-trained {g3(d)} u vs uniform-trained {g3(u)} u, Welch p = {g3(p)} ({A.stars(p)})",
+            verdict(p >= 0.05))
+
+
+def c_more_familiar(r):
+    fam = _familiarity(r)
+    if fam is None:
+        return r.analysis_error, "not measured"
+    tab = fam.best_table()
+    wins = [e for i, e in enumerate(fam.envs) if tab[i, 0, 0] > tab[i, 0, 1]]
+    sig = [e for i, e in enumerate(fam.envs) if tab[i, 0, 0] > tab[i, 0, 1] and tab[i, 0, 2] < 0.05]
+    return (f"more states in shared cells for the diverse-trained connector in {len(wins)} of {len(fam.envs)} novel "
+            f"environments ({len(sig)} with p < 0.05)"), verdict(len(wins) > len(fam.envs) / 2)
+
+
+def c_uniform_more_novel_states(r):
+    fam = _familiarity(r)
+    if fam is None:
+        return r.analysis_error, "not measured"
+    tab = fam.best_table()
+    more = [e for i, e in enumerate(fam.envs) if tab[i, 2, 1] > tab[i, 2, 0]]
+    return (f"more novel-only states for the uniform-trained connector in {len(more)} of {len(fam.envs)} novel "
+            f"environments"), verdict(len(more) > len(fam.envs) / 2)
+
+
+def c_wind_unfamiliar(r):
+    fam = _familiarity(r)
+    if fam is None:
+        return r.analysis_error, "not measured"
+    if A.WIND not in fam.envs:
+        return "no wind environment in the familiarity results", "not measured"
+    t = fam.best_table()[fam.envs.index(A.WIND)]
+    d_one, u_one = t[1, 0] + t[2, 0], t[1, 1] + t[2, 1]
+    return (f"wind, mean states: in both — diverse-trained {t[0, 0]:.1f}, uniform-trained {t[0, 1]:.1f}; unique to "
+            f"training or wind — diverse-trained {d_one:.1f}, uniform-trained {u_one:.1f}"), \
+        verdict(t[0, 0] > t[0, 1] and u_one > d_one)
+
+
 CLAIMS = [
     ("Trained agents travel almost 4 BL on flat; random ones about 0", c_agents_trained),
     ("Independent agents suffer the greatest drop in the novel environments", c_agents_drop),
@@ -203,6 +303,21 @@ CLAIMS = [
     ("Generalists sometimes beat specialists trained in the environment (Fig. S2)", c_specialists),
     ("The advantage of diversity grows with collective size (Fig. 4)", c_scaling),
     ("More sources of diversity give more resilience (Fig. S3)", c_graded),
+    ("Tethered agents within diverse collectives were disrupted more than agent clones within uniform collectives "
+     "(mean DTW distance, Fig. 3A)", c_diverse_disrupted_more),
+    ("Adversity was tamed: worse-performing agents were altered more than better-performing ones, for both connector "
+     "types (Fig. 3A)", c_worse_altered_more),
+    ("Diversely trained connectors caused a significantly larger change in the worse-performing agent's behaviour "
+     "than uniformly trained connectors did (Fig. 3A; paper p < 0.001, here p < 0.05 required)",
+     c_diverse_change_worse_more),
+    ("The connectors' effect on better-performing agents was comparable between the two types (Fig. 3A; no "
+     "significant Welch difference)", c_better_comparable),
+    ("New environments feel more familiar to diversely trained connectors: in most novel environments more of their "
+     "hidden states fall in cells shared with training (PaCMAP, Table S1)", c_more_familiar),
+    ("Uniformly trained connectors encounter more states exclusive to the novel environment in most environments "
+     "(Table S1)", c_uniform_more_novel_states),
+    ("Wind felt more unfamiliar to the uniformity-trained connector: fewer percepts in both training and wind, more "
+     "unique to one of them (Fig. 3B-C)", c_wind_unfamiliar),
 ]
 
 

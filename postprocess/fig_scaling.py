@@ -20,7 +20,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]
+STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
 
 
 def _s(v):

@@ -4,8 +4,9 @@ numbers with a verdict each, the summary tables, and every figure the postproces
 
     /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll]
 
-Writes DIR/report.md and DIR/figures/*. A figure script that fails (for example because its stage is
-missing from the run file) is listed with its message instead of its figure; the page is still written.
+Writes DIR/report.md, DIR/table_s1.md and DIR/figures/*. A figure script that fails (for example because its
+stage is missing from the run file) is listed with its message instead of its figure; the page is still written.
+Fig. 3 and Table S1 (the analysis stage) are skipped with a note unless the analysis stage is complete.
 """
 import argparse
 import glob
@@ -18,15 +19,51 @@ sys.path.insert(0, HERE)
 
 import claims  # noqa: E402
 import summary  # noqa: E402
+from divcoll_post import analysis as A  # noqa: E402
 
 # figure scripts, in the paper's order, with the arguments they take besides the run file and --out
-FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig4.py", []), ("fig_s2.py", []), ("fig_s3.py", []),
-           ("contact_sheet.py", ["--divcoll"])]
+FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig3.py", []), ("fig4.py", []), ("fig_s2.py", []),
+           ("fig_s3.py", []), ("contact_sheet.py", ["--divcoll"])]
+# outputs of the analysis stage: drawn only when it is complete
+ANALYSIS_SCRIPTS = {"fig3.py", "table_s1.py"}
 
 
-def draw_figures(run, fig_dir, divcoll):
+def analysis_skip(run):
+    """None when the analysis stage is complete, else why Fig. 3 and Table S1 are skipped"""
+    try:
+        st, desc = A.analysis_status(run)
+    except OSError as e:
+        return f"cannot read the run file: {e}"
+    if st == "complete":
+        return None
+    return desc if st is None else f"{desc}: run the analysis stage to the end first"
+
+
+def table_s1_section(run, out_dir, skip):
+    """Table S1 (table_s1.py, written to out_dir/table_s1.md) as a section of the page, or a note"""
+    head = ["## Table S1: familiarity of the connectors' hidden states", ""]
+    if skip:
+        return head + [f"Skipped: {skip}.", ""]
+    p = subprocess.run([sys.executable, os.path.join(HERE, "table_s1.py"), run, "--out", out_dir],
+                       capture_output=True, text=True)
+    if p.returncode != 0:
+        msg = (p.stderr.strip() or p.stdout.strip()).splitlines()
+        return head + [f"Not written: {msg[-1] if msg else 'exit ' + str(p.returncode)}", ""]
+    with open(p.stdout.strip().splitlines()[-1]) as fh:
+        body = fh.read().splitlines()
+    if body and body[0].startswith("# "):
+        body = body[1:]
+    while body and not body[0].strip():
+        body = body[1:]
+    return head + body + [""]
+
+
+def draw_figures(run, fig_dir, divcoll, skip=None):
     notes = []
     for script, extra in FIGURES:
+        if script in ANALYSIS_SCRIPTS and skip:
+            notes.append(f"- `{script}` skipped: {skip}")
+            continue
         path = os.path.join(HERE, script)
         if not os.path.exists(path):
             notes.append(f"- `{script}`: not available in this version")
@@ -44,7 +81,8 @@ def draw_figures(run, fig_dir, divcoll):
 def write_report(run, out_dir, divcoll):
     fig_dir = os.path.join(out_dir, "figures")
     os.makedirs(fig_dir, exist_ok=True)
-    notes = draw_figures(run, fig_dir, divcoll)
+    skip = analysis_skip(run)
+    notes = draw_figures(run, fig_dir, divcoll, skip)
     lines = [summary.summarize(run).replace("# divcoll run summary", "# divcoll report", 1), ""]
     table = ["## The paper's claims beside this run", "",
              "| claim | this run | verdict |", "|---|---|---|"]
@@ -57,6 +95,7 @@ def write_report(run, out_dir, divcoll):
     # the claims go first, after the provenance paragraph
     head, _, rest = lines[0].partition("\n\n| stage")
     page = [head, "", *table, "## Stages and numbers", "", "| stage" + rest]
+    page += table_s1_section(run, out_dir, skip)
     page += ["## Figures", ""]
     pngs = sorted(glob.glob(os.path.join(fig_dir, "*.png")))
     for png in pngs:

@@ -48,7 +48,7 @@ def summarize(path):
           f"ranks {_s(f.attrs.get('ranks', '?'))}, started {_s(f.attrs.get('start_time', '?'))}, "
           f"ended {_s(f.attrs.get('end_time', '(not finished)'))}\n")
         w("| stage | status | wall time (s, summed over sessions) |\n|---|---|---|")
-        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded"]:
+        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]:
             if st in f:
                 g = f[st]
                 wall = g.attrs.get("wall_s", g.attrs.get("wall_s_last_session", float("nan")))
@@ -150,7 +150,38 @@ def summarize(path):
                 w(f"| {pop} | {_s(g.attrs.get('diversity_sources', '?'))} | {fmt(np.mean(am[novel]))} | "
                   f"{fmt(np.mean(pm[novel]))} |")
             w("")
+    lines += analysis_lines(path)
     return "\n".join(lines)
+
+
+def analysis_lines(path):
+    """Fig. 3A's numbers and Table S1's gist when the analysis stage is complete; a note when it is not."""
+    from divcoll_post import analysis as A
+    from divcoll_post.runfile import RunFileError
+
+    st, desc = A.analysis_status(path)
+    if st is None:
+        return []
+    if st != "complete":
+        return [f"**Adversity and familiarity** (Fig. 3, Table S1): not summarized, {desc}.\n"]
+    try:
+        an = A.load_analysis(path)
+    except RunFileError as e:
+        return [f"**Adversity and familiarity** (Fig. 3, Table S1): cannot read: {e}\n"]
+    adv, fam = an.adversity, an.familiarity
+    out = [f"**Adversity** (Fig. 3A; DTW distance per step, u; mean over {adv.replicates} replicates, 95% bootstrap "
+           f"CI):\n", "| agent | uniform-trained | diverse-trained | Welch p |", "|---|---|---|---|"]
+    for k, name in ((A.WORSE, "worse-performing"), (A.BETTER, "better-performing")):
+        cells = []
+        for t in A.TYPES:
+            lo, hi = adv.ci(t, k)
+            cells.append(f"{fmt(adv.mean(t, k))} [{fmt(lo)}, {fmt(hi)}]")
+        out.append(f"| {name} | " + " | ".join(cells) + f" | {adv.p(k):.3g} {A.stars(adv.p(k))} |")
+    tab = fam.best_table()
+    wins = sum(1 for e in range(len(fam.envs)) if tab[e, 0, 0] > tab[e, 0, 1])
+    out += ["", f"**Familiarity** (Table S1): the novel environment is more familiar (more states in cells shared with "
+                f"training) to the diverse-trained connector in {wins} of {len(fam.envs)} novel environments.", ""]
+    return out
 
 
 def main(argv=None):
