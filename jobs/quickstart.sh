@@ -8,7 +8,7 @@ source jobs/mpi-env.sh
 bash jobs/build.sh
 mkdir -p out
 mpirun -np "$(nproc)" build/divcoll run configs/quick.toml --out out/quick.h5 --force
-/usr/bin/python3 postprocess/report.py out/quick.h5 --divcoll build/divcoll --out out/report
+build/divcoll report out/quick.h5 --out out/report
 build/divcoll demo --out out/demo
 echo
 echo "run file: out/quick.h5    report: out/report/report.md (figures in out/report/figures/)    demo scenes: out/demo/"

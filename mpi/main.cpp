@@ -57,6 +57,11 @@ int main(int argc, char** argv) {
   d->add_option("--seed", demo.seed, "random seed");
   d->add_option("--steps", demo.steps, "steps per episode")->check(CLI::Range(1, 10000000));
 
+  cli::ReportArgs rep;
+  auto* rp = app.add_subcommand("report", "one page with the paper's claims beside a run file's numbers, and every figure");
+  rp->add_option("run", rep.run, "run file")->required()->check(CLI::ExistingFile);
+  rp->add_option("--out", rep.out, "output folder (report.md, table_s1.md, figures/)");
+
   cli::BenchArgs bench;
   auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
   b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
@@ -116,6 +121,7 @@ int main(int argc, char** argv) {
     if (*s) return cli::simulate(sim);
     if (*c) return cli::scene(sc);
     if (*d) return cli::demo(demo);
+    if (*rp) return cli::report(rep);
     if (*x) return cli::export_scene(ex);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();

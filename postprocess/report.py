@@ -78,6 +78,42 @@ def draw_figures(run, fig_dir, divcoll, skip=None):
     return notes
 
 
+def motion_section(fig_dir, out_dir):
+    """two animations (the uniform and the diverse weak pair in one novel environment) from the episode
+    files contact_sheet.py exported, and links to the contact sheet and every exported episode"""
+    head = ["## Motion", ""]
+    ep_dir = os.path.join(fig_dir, "episodes")
+    scenes = sorted(glob.glob(os.path.join(ep_dir, "*_scene.h5")))
+    if not scenes:
+        return head + ["No episodes were exported (the contact sheet was not drawn).", ""]
+    envs = []
+    for sc in scenes:
+        env = os.path.basename(sc).split("_weak_")[0]
+        if env not in envs:
+            envs.append(env)
+    pick = "wind" if "wind" in envs else next((e for e in envs if e != "flat"), envs[0])
+    lines = head + [f"Animations of pair 0 of replicate 0 in **{pick}** (springs coloured by strain, blue "
+                    "shortened, red stretched; the camera follows the centre of mass):", ""]
+    import animate  # noqa: E402 (matplotlib animation; only needed here)
+    for sc in scenes:
+        if not os.path.basename(sc).startswith(pick + "_weak_"):
+            continue
+        traj = sc.replace("_scene.h5", "_traj.h5")
+        gif = sc.replace("_scene.h5", ".gif")
+        try:
+            animate.animate(sc, traj, gif, every=20)
+            rel = os.path.relpath(gif, out_dir)
+            lines.append(f"- [{os.path.basename(gif)}]({rel})")
+        except Exception as e:  # a broken episode file is reported, the page is still written
+            lines.append(f"- {os.path.basename(sc)}: not animated ({e})")
+    lines += ["", f"The contact sheet (last step of every environment) is `figures/contact_sheet.png`; the scene and "
+              f"trajectory files of all its episodes are in `{os.path.relpath(ep_dir, out_dir)}/`. Any other "
+              "episode: `divcoll export RUN.h5 --what pair --env ENV --type TYPE --pair Q --out S.h5`, "
+              "`divcoll simulate --scene S.h5 --steps T --out T.h5`, "
+              "`/usr/bin/python3 postprocess/animate.py S.h5 T.h5 --out episode.gif`.", ""]
+    return lines
+
+
 def write_report(run, out_dir, divcoll):
     fig_dir = os.path.join(out_dir, "figures")
     os.makedirs(fig_dir, exist_ok=True)
@@ -96,6 +132,7 @@ def write_report(run, out_dir, divcoll):
     head, _, rest = lines[0].partition("\n\n| stage")
     page = [head, "", *table, "## Stages and numbers", "", "| stage" + rest]
     page += table_s1_section(run, out_dir, skip)
+    page += motion_section(fig_dir, out_dir)
     page += ["## Figures", ""]
     pngs = sorted(glob.glob(os.path.join(fig_dir, "*.png")))
     for png in pngs:
@@ -117,6 +154,18 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if not os.path.exists(a.run):
         print(f"report: no such run file: {a.run}", file=sys.stderr)
+        return 2
+    try:
+        import h5py
+        with h5py.File(a.run, "r") as f:
+            fmt = f.attrs.get("format", b"")
+            fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
+        if fmt != "divcoll-run":
+            print(f"report: {a.run} is not a divcoll run file (its format attribute is {fmt or 'missing'!r}; "
+                  "a scene or trajectory file, or a foreign HDF5 file?)", file=sys.stderr)
+            return 2
+    except OSError as e:
+        print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
         return 2
     try:
         path, n, v = write_report(a.run, a.out, a.divcoll)

@@ -42,6 +42,12 @@ struct DemoArgs {
 };
 int demo(const DemoArgs& a);
 
+// divcoll report RUN.h5 --out DIR: the report page of a run file (postprocess/report.py under /usr/bin/python3)
+struct ReportArgs {
+  std::string run, out = "out/report";
+};
+int report(const ReportArgs& a);  // replaces the process with Python; returns only by throwing
+
 // divcoll bench: steps per second per core and speed against error
 struct BenchArgs {
   double seconds = 0.5;  // minimum timed wall time per row
