@@ -31,6 +31,7 @@ from __future__ import annotations
 import os
 import string
 import sys
+import textwrap
 
 import matplotlib
 
@@ -299,7 +300,9 @@ def draw(args) -> list:
     steps = R.config_value(meta, "deploy", "episode_steps")
     if steps is not None:
         foot += f" Deployment episodes of {steps} steps."
-    fig.text(0.5, 0.18 / fig_h, foot, ha="center", va="bottom", fontsize=8, color="#333333")
+    # wrapped, so a long list of episodes left out stays inside the figure
+    foot = "\n".join(textwrap.wrap(foot, width=200))
+    fig.text(0.5, 0.08 / fig_h, foot, ha="center", va="bottom", fontsize=8, color="#333333")
     paths = R.save(fig, args.out, STEM, dpi=args.dpi, software="divcoll fig2")
     plt.close(fig)
     return paths
