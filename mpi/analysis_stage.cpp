@@ -78,17 +78,6 @@ void serialize(Ar& ar, FitDone& d, unsigned) {
 
 bool same_bits(double x, double y) { return (std::isnan(x) && std::isnan(y)) || x == y; }
 
-// K of n indices, distinct and sorted, by a partial Fisher–Yates shuffle (all of them when K ≥ n)
-std::vector<int64_t> subsample(Rng& rng, int64_t n, int64_t K) {
-  std::vector<int64_t> idx(n);
-  for (int64_t i = 0; i < n; ++i) idx[i] = i;
-  const int64_t k = std::min(K, n);
-  for (int64_t i = 0; i < k; ++i) std::swap(idx[i], idx[i + uniform_int(rng, n - i)]);
-  idx.resize(k);
-  std::sort(idx.begin(), idx.end());
-  return idx;
-}
-
 // the finite hidden states of replicate r in environment e (ok episodes only), at most max_states of them
 std::vector<float> states_of(const std::vector<float>& all, int e, int r, int R, int NP, int K, int max_states,
                              Rng& rng) {
@@ -100,7 +89,7 @@ std::vector<float> states_of(const std::vector<float>& all, int e, int r, int R,
       if (std::all_of(s, s + kHidden, [](float v) { return std::isfinite(v); })) rows.push_back(row);
     }
   std::vector<float> out;
-  for (int64_t i : subsample(rng, static_cast<int64_t>(rows.size()), max_states))
+  for (int64_t i : sorted_sample(rng, static_cast<int64_t>(rows.size()), max_states))
     out.insert(out.end(), &all[rows[i] * kHidden], &all[rows[i] * kHidden] + kHidden);
   return out;
 }
@@ -130,13 +119,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   const int pop = static_cast<int>(agents.size());
 
   // the two types among deploy's, their weights and pairs
-  std::vector<std::string> deploy_types;
-  {
-    const std::string t = file.group("deploy").read_string("types");
-    size_t s = 0;
-    for (size_t c; (c = t.find(',', s)) != std::string::npos; s = c + 1) deploy_types.push_back(t.substr(s, c - s));
-    deploy_types.push_back(t.substr(s));
-  }
+  const std::vector<std::string> deploy_types = split(file.group("deploy").read_string("types"));
   const int T = static_cast<int>(deploy_types.size());
   std::array<int, 2> type_index{};
   std::array<std::vector<std::vector<double>>, 2> weights;
@@ -236,7 +219,6 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     const FarmResult fa = farm(comm, items, alone);
     long mismatches = 0;
     std::vector<double> alone_bl(pop, kNaN);
-    std::string bytes;
     if (rank == 0) {
       for (int a = 0; a < pop; ++a) {
         AloneDone d = unpack<AloneDone>(fa.results[a]);
@@ -245,14 +227,9 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
         alone_bl[a] = d.status == 0 ? d.travel_bl : kNaN;
         behaviour[a] = std::move(d.behaviour);
       }
-      bytes = pack(behaviour);
     }
     // every rank needs every agent's independent behaviour
-    int64_t nb = static_cast<int64_t>(bytes.size());
-    MPI_Bcast(&nb, 1, MPI_INT64_T, 0, comm);
-    bytes.resize(nb);
-    MPI_Bcast(bytes.data(), static_cast<int>(nb), MPI_BYTE, 0, comm);
-    behaviour = unpack<std::vector<std::vector<double>>>(bytes);
+    behaviour = broadcast(comm, behaviour);
 
     items.clear();
     if (rank == 0)
@@ -315,11 +292,10 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     if (rank == 0 && fam_done < EN)
       for (int t = 0; t < 2; ++t) {
         Dims d;
-        std::vector<double> wide = file.read<double>("deploy/hidden/" + kTypes[t] + "/states", &d);
+        hidden[t] = file.read<float>("deploy/hidden/" + kTypes[t] + "/states", &d);
         DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == hE && d[1] == hR && d[2] == hN && d[4] == kHidden,
                              file.file() << ": deploy/hidden/" << kTypes[t] << "/states has an unexpected shape");
         K = static_cast<int>(d[3]);
-        hidden[t].assign(wide.begin(), wide.end());
       }
     auto fit = [&](const std::string& bytes) {
       const FitTask task = unpack<FitTask>(bytes);

@@ -49,17 +49,10 @@ void bcast_doubles(MPI_Comm comm, std::vector<double>& v) {
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file, const std::string& group) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  std::string bytes;
-  if (rank == 0) {
-    std::vector<collective::Agent> agents;
+  std::vector<collective::Agent> agents;
+  if (rank == 0)
     for (const evo::Individual& x : read_final_population(file, group)) agents.push_back(x.agent);
-    bytes = pack(agents);
-  }
-  int64_t n = static_cast<int64_t>(bytes.size());
-  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
-  bytes.resize(n);
-  MPI_Bcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm);
-  std::vector<collective::Agent> agents = unpack<std::vector<collective::Agent>>(bytes);
+  agents = broadcast(comm, agents);
   // anchors from each agent's own 1000-step run on flat: the same on every rank
   for (auto& a : agents) a.anchors = collective::compute_anchors(a);
   return agents;

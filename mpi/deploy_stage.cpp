@@ -36,17 +36,6 @@ void serialize(Ar& ar, DeployDone& d, unsigned) {
   ar & d.done & d.hidden & d.hidden_index;
 }
 
-// K of `n` indices, distinct and sorted, drawn from rng (all of them when K ≥ n)
-std::vector<int32_t> sample_indices(Rng& rng, int n, int K) {
-  std::vector<int32_t> idx(n);
-  for (int i = 0; i < n; ++i) idx[i] = i;
-  const int k = std::min(K, n);
-  for (int i = 0; i < k; ++i) std::swap(idx[i], idx[i + uniform_int(rng, n - i)]);
-  idx.resize(k);
-  std::sort(idx.begin(), idx.end());
-  return idx;
-}
-
 }  // namespace
 
 void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
@@ -127,7 +116,8 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
         // the episode's stream: (seed, deploy + 1, the episode's index in every environment's list)
         const uint64_t item = ((static_cast<uint64_t>(env_index) * T + e.type) * R + e.replicate) * NP + e.pair;
         Rng rng = make_rng(cfg.run.seed, kDeployStage + 1, item);
-        d.hidden_index = sample_indices(rng, per_episode, K);
+        const std::vector<int64_t> picked = sorted_sample(rng, per_episode, K);
+        d.hidden_index.assign(picked.begin(), picked.end());
         d.hidden.assign(d.hidden_index.size() * 32, std::numeric_limits<float>::quiet_NaN());
         if (o.status == sim::Status::ok)
           for (size_t k = 0; k < d.hidden_index.size(); ++k)

@@ -15,6 +15,8 @@
 #include <boost/serialization/array.hpp>
 #include <boost/serialization/string.hpp>
 #include <boost/serialization/vector.hpp>
+#include <mpi.h>
+
 #include <sstream>
 #include <string>
 
@@ -45,6 +47,19 @@ T unpack(const std::string& bytes) {
   return v;
 }
 
+// rank 0's `value` on every rank (serialized, then broadcast); other ranks' `value` is ignored
+template <class T>
+T broadcast(MPI_Comm comm, const T& value) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string bytes = rank == 0 ? pack(value) : std::string();
+  int64_t n = static_cast<int64_t>(bytes.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
+  bytes.resize(static_cast<size_t>(n));
+  MPI_Bcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm);
+  return unpack<T>(bytes);
+}
+
 }  // namespace divcoll::mpi
 
 namespace divcoll::mpi {
@@ -64,6 +79,13 @@ inline std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
   return s;
+}
+// the names of such an attribute value
+inline std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string x; std::getline(ss, x, ',');) out.push_back(x);
+  return out;
 }
 
 }  // namespace divcoll::mpi

@@ -12,17 +12,12 @@
 #include "io/h5.hpp"
 #include "io/scene_file.hpp"
 #include "mpi/agents_stage.hpp"
+#include "mpi/protocol.hpp"
 
 namespace divcoll::cli {
 namespace {
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string x;
-  while (std::getline(ss, x, ',')) out.push_back(x);
-  return out;
-}
+using mpi::split;
 
 int index_of(const std::vector<std::string>& v, const std::string& x, const std::string& what) {
   for (size_t i = 0; i < v.size(); ++i)

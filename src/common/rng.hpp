@@ -7,10 +7,12 @@
 // bit-identical wherever libm is). Every generator is seeded by seed_for(run seed, stage, item index).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <random>
+#include <vector>
 
 namespace divcoll {
 
@@ -61,5 +63,17 @@ inline double normal(Rng& rng) {
 
 // N(mean, sd²)
 inline double normal(Rng& rng, double mean, double sd) { return mean + sd * normal(rng); }
+
+// k of the indices 0..n−1, distinct and in increasing order, by a partial Fisher–Yates shuffle (all of
+// them when k ≥ n)
+inline std::vector<int64_t> sorted_sample(Rng& rng, int64_t n, int64_t k) {
+  std::vector<int64_t> idx(static_cast<size_t>(n));
+  for (int64_t i = 0; i < n; ++i) idx[i] = i;
+  const int64_t m = std::min(k, n);
+  for (int64_t i = 0; i < m; ++i) std::swap(idx[i], idx[i + uniform_int(rng, n - i)]);
+  idx.resize(static_cast<size_t>(m));
+  std::sort(idx.begin(), idx.end());
+  return idx;
+}
 
 }  // namespace divcoll
