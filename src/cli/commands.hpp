@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace divcoll::cli {
 
@@ -68,7 +69,8 @@ int compare(const std::string& a, const std::string& b);
 // divcoll envs: the built-in environments
 int envs();
 
-// refuses to overwrite an existing file unless forced
-void check_output_path(const std::string& path, bool force);
+// refuses to overwrite an existing file unless forced, and always refuses an output that is a directory,
+// not a regular file (a device node: never replaced, even with --force), or one of `inputs`
+void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs = {});
 
 }  // namespace divcoll::cli

@@ -14,9 +14,19 @@
 
 namespace divcoll::cli {
 
-void check_output_path(const std::string& path, bool force) {
+void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs) {
   namespace fs = std::filesystem;
   DIVCOLL_THROW_UNLESS(!path.empty(), "no output path given");
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::exists(st)) {
+    DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the output file's path");
+    DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
+                                                            "pipe or socket); divcoll never writes over one, even with --force");
+    for (const std::string& in : inputs)
+      DIVCOLL_THROW_UNLESS(!fs::equivalent(path, in, ec), "--out " << path << " is the input file " << in
+                                                                    << "; write the output elsewhere");
+  }
   if (fs::exists(path) && !force)
     throw InputError(msg() << path << " exists; pass --force to overwrite it");
   const fs::path parent = fs::absolute(path).parent_path();
@@ -24,7 +34,7 @@ void check_output_path(const std::string& path, bool force) {
 }
 
 int simulate(const SimulateArgs& a) {
-  check_output_path(a.out, a.force);
+  check_output_path(a.out, a.force, {a.scene});
   const sim::Scene scene = io::read_scene(a.scene);
   sim::RunOptions opt;
   opt.steps = a.steps;

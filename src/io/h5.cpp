@@ -1,6 +1,12 @@
 // the RAII layer over the HDF5 C API: handles, attributes, datasets, and HDF5 failures as InputError.
 #include "io/h5.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <exception>
 #include <filesystem>
 #include <limits>
 
@@ -476,7 +482,9 @@ File File::create(const std::string& path, bool overwrite, hid_t fapl) {
   if (std::filesystem::is_directory(path, ec)) throw InputError(path + " is a directory");
   Handle f(H5Fcreate(path.c_str(), overwrite ? H5F_ACC_TRUNC : H5F_ACC_EXCL, H5P_DEFAULT, fapl), H5Fclose);
   if (!f.valid()) fail(path, "cannot create the HDF5 file");
-  return File(std::move(f), path, "/");
+  File out(std::move(f), path, "/");
+  out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  return out;
 }
 
 File File::open(const std::string& path, bool writable, hid_t fapl) {
@@ -484,6 +492,16 @@ File File::open(const std::string& path, bool writable, hid_t fapl) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + " does not exist");
   if (std::filesystem::is_directory(path, ec)) throw InputError(path + " is a directory, not an HDF5 file");
+  // the system's own reason (permissions, an immutable file, a read-only file system) before HDF5's guess
+  const int fd = ::open(path.c_str(), writable ? O_RDWR : O_RDONLY);
+  if (fd < 0) {
+    const int err = errno;
+    H5Eclear2(H5E_DEFAULT);
+    throw InputError(path + ": cannot open it " + (writable ? "for writing" : "for reading") + ": " +
+                     std::strerror(err) +
+                     (err == EPERM && writable ? " (is it immutable? see lsattr)" : ""));
+  }
+  ::close(fd);
   const htri_t is = H5Fis_hdf5(path.c_str());
   if (is == 0) {
     H5Eclear2(H5E_DEFAULT);
@@ -492,7 +510,18 @@ File File::open(const std::string& path, bool writable, hid_t fapl) {
   if (is < 0) fail(path + " cannot be read as an HDF5 file");
   Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl), H5Fclose);
   if (!f.valid()) fail(path + " is not a readable HDF5 file (truncated or damaged?)");
-  return File(std::move(f), path, "/");
+  File out(std::move(f), path, "/");
+  out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  return out;
+}
+
+File::~File() {
+  // (H5Fget_access_plist would duplicate the communicator: collective, so it cannot be asked here)
+  if (std::uncaught_exceptions() > 0 && mpio_ && handle_.valid()) {
+    (void)handle_.release();
+    return;
+  }
+  handle_.reset();
 }
 
 void File::close() {

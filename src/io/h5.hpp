@@ -41,6 +41,12 @@ class Handle {
   bool valid() const { return id_ >= 0; }
   // closes now; returns false if HDF5 reported a failure
   bool reset();
+  // forgets the identifier without closing it; returns it
+  hid_t release() {
+    const hid_t id = id_;
+    id_ = H5I_INVALID_HID;
+    return id;
+  }
 
  private:
   hid_t id_ = H5I_INVALID_HID;
@@ -120,9 +126,16 @@ class Node {
 
 class File : public Node {
  public:
+  File(File&&) noexcept = default;
+  File& operator=(File&&) noexcept = default;
+  // closes the file, except while an exception unwinds the stack through a file opened with MPI-IO:
+  // closing is collective, and the other ranks are not closing it, so the handle is left to the process's
+  // end (the error path calls MPI_Abort) instead of waiting for ranks that never come
+  ~File();
   // creates a new file; refuses an existing one unless overwrite is set (then it is truncated)
   static File create(const std::string& path, bool overwrite, hid_t fapl = H5P_DEFAULT);
-  // opens an existing HDF5 file; "X does not exist" / "X is not an HDF5 file" otherwise
+  // opens an existing HDF5 file; "X does not exist" / "X is not an HDF5 file" / "cannot open X for
+  // writing: <the system's reason>" otherwise
   static File open(const std::string& path, bool writable = false, hid_t fapl = H5P_DEFAULT);
   // flushes and closes, throwing if HDF5 reports a failure (the destructor closes silently)
   void close();
@@ -131,6 +144,7 @@ class File : public Node {
 
  private:
   using Node::Node;
+  bool mpio_ = false;  // opened or created with an MPI-IO file access property list
 };
 
 }  // namespace divcoll::io::h5
