@@ -14,7 +14,12 @@
 #include <algorithm>
 #include <set>
 
+#include "collective/builders.hpp"
+#include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "common/memory.hpp"
+#include "common/rng.hpp"
+#include "morph/body.hpp"
 #include "common/version.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
@@ -146,6 +151,50 @@ void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std
   }
 }
 
+// the tape of the longest episode with gradients of the stages that run: every rank's simulator holds
+// one, so the ranks on a node share run.memory_limit_gb (default 80% of rank 0's MemAvailable)
+void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  int per_node = 1;
+  MPI_Comm_size(node, &per_node);
+  MPI_Comm_free(&node);
+  agree_rank0(comm, [&] {
+    Rng rng = make_rng(cfg.run.seed, 0, 0);
+    collective::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
+    sim::RunOptions opt;
+    opt.grad = true;
+    uint64_t need = 0;
+    std::string what;
+    auto consider = [&](const sim::Scene& s, int steps, const std::string& key) {
+      opt.steps = steps;
+      const uint64_t n = episode_bytes(s, opt);
+      if (n > need) need = n, what = key + " = " + std::to_string(steps) + ", " + std::to_string(sim::substeps_needed(s)) + " substep(s) per step";
+    };
+    const bool run = !args.agents_only;
+    if (args.agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
+      consider(collective::agent_scene(a, "flat"), cfg.agents.episode_steps, "agents.episode_steps");
+    if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
+      a.anchors = collective::compute_anchors(a);
+      b.anchors = collective::compute_anchors(b);
+      const std::vector<double> w = morph::init_connector_params(rng);
+      double k = cfg.connectors.weak_stiffness;
+      for (const std::string& kind : cfg.connectors.kinds)
+        if (!collective::kind_is_weak(kind) && io::stage_enabled(cfg, "connectors")) k = cfg.connectors.strong_stiffness;
+      std::vector<std::string> envs = {"flat"};
+      if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
+      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, k, env), cfg.connectors.episode_steps, "connectors.episode_steps");
+    }
+    const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
+    if (need > limit)
+      throw InputError(msg() << "each rank's episodes with gradients need about " << gb_text(need) << " of memory ("
+                             << what << "), more than its share of the limit: " << gb_text(limit) << " = "
+                             << (cfg.run.memory_limit_gb > 0 ? "run.memory_limit_gb" : "80% of MemAvailable")
+                             << " / " << per_node << " rank(s) on this node. Shorten the episodes, run fewer ranks "
+                             << "per node, or raise run.memory_limit_gb");
+  });
+}
+
 // refuses outputs that are not (or would not be) regular files, and an output that is one of the inputs
 void check_run_output(const std::string& path, const RunArgs& args) {
   namespace fs = std::filesystem;
@@ -253,6 +302,8 @@ int run_session(const RunArgs& args) {
         if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
       });
     }
+    // memory: the tapes of the episodes with gradients, before any is allocated
+    check_memory(MPI_COMM_WORLD, cfg, args);
     // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
     agree_rank0(MPI_COMM_WORLD, [&] {
       check_stage_inputs(cfg, args, existing ? path : std::string());

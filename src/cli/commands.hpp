@@ -13,6 +13,7 @@ struct SimulateArgs {
   int steps = 1000;
   bool grad = false;
   bool force = false;
+  double memory_limit_gb = 0;  // 0: 80% of MemAvailable
 };
 int simulate(const SimulateArgs& a);
 

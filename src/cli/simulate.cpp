@@ -6,6 +6,7 @@
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "common/check.hpp"
+#include "common/memory.hpp"
 #include "io/environments.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
@@ -40,23 +41,31 @@ int simulate(const SimulateArgs& a) {
   opt.steps = a.steps;
   opt.grad = a.grad;
   opt.record = true;
-  const sim::RunResult r = sim::simulate(scene, opt);
+  // the tape (--grad) and the recorded trajectory, known before they are allocated
+  const uint64_t need = episode_bytes(scene, opt), limit = memory_limit_bytes(a.memory_limit_gb);
+  DIVCOLL_THROW_UNLESS(need <= limit, a.scene << " for " << a.steps << " steps" << (a.grad ? " with --grad" : "")
+                                              << " needs about " << gb_text(need) << " of memory ("
+                                              << sim::substeps_needed(scene) << " substep(s) per step), more than the limit of "
+                                              << gb_text(limit)
+                                              << (a.memory_limit_gb > 0 ? " (--memory-limit-gb)" : " (80% of MemAvailable; raise it with --memory-limit-gb)")
+                                              << ": simulate fewer steps");
+  sim::RunResult r = sim::simulate(scene, opt);
 
   io::Trajectory t;
   t.steps = a.steps;
   t.n_masses = scene.n_masses();
   t.n_agents = scene.n_agents();
-  t.x = r.x;
-  t.v = r.v;
-  t.touch = r.touch;
+  t.x = std::move(r.x);
+  t.v = std::move(r.v);
+  t.touch = std::move(r.touch);
   t.travel = r.travel;
   t.status = sim::status_name(r.status);
   t.has_grad = a.grad;
   if (a.grad) {
-    t.grad_agent_params = r.grad_agent_params;
-    t.grad_connector_params = r.grad_connector_params;
-    t.grad_x0 = r.grad_x0;
-    t.grad_rest_length = r.grad_rest_length;
+    t.grad_agent_params = std::move(r.grad_agent_params);
+    t.grad_connector_params = std::move(r.grad_connector_params);
+    t.grad_x0 = std::move(r.grad_x0);
+    t.grad_rest_length = std::move(r.grad_rest_length);
   }
   io::write_trajectory(a.out, t, a.force);
   std::printf("%s: %d steps (%d substeps each), status %s, travel %.6f u = %.4f BL%s\n", a.out.c_str(), a.steps,

@@ -215,6 +215,32 @@ bad_outputs)
     echo "  (chattr +i is not supported here: the immutable case is not checked)"
   fi
   ;;
+memory)
+  # the tape is estimated before it is allocated: refused at once with the estimate and the limit
+  S="$W/pair.h5"
+  "$D" scene --kind pair --env flat --out "$S" > /dev/null || fail "scene"
+  try timeout 30 "$D" simulate --scene "$S" --steps 10000000 --grad --out "$W/t.h5"
+  expect 2 "for 10000000 steps with --grad needs about"
+  grep -qF "more than the limit of" <<< "$out" || fail "no limit in the message: $out"
+  cp "$S" "$W/light.h5"
+  /usr/bin/python3 -c "import h5py; f = h5py.File('$W/light.h5', 'a'); f['masses/m'][...] = 1e-9" || fail "h5py"
+  try timeout 30 "$D" simulate --scene "$W/light.h5" --steps 1000 --grad --out "$W/t.h5"
+  expect 2 "substep(s) per step), more than the limit of"
+  # an explicit limit, and the same episode under a generous one
+  try "$D" simulate --scene "$S" --steps 200 --grad --out "$W/t.h5" --memory-limit-gb 0.001
+  expect 2 "(--memory-limit-gb)"
+  try "$D" simulate --scene "$S" --steps 200 --grad --out "$W/t.h5" --memory-limit-gb 1
+  [ "$rc" = 0 ] || fail "a small episode under a 1 GB limit: $out"
+  [ ! -e "$W/t2.h5" ] || fail "unexpected output"
+  # the run: every rank's tape, before any work, at 1 and 2 ranks
+  for np in 1 2; do
+    try mpirun -np "$np" "$D" run "$CFG" agents.episode_steps=10000000 --out "$W/r.h5"
+    expect 2 "each rank's episodes with gradients need about"
+    try mpirun -np "$np" "$D" run "$CFG" 'run.stages=["agents","connectors"]' run.memory_limit_gb=0.001 --out "$W/r.h5"
+    expect 2 "run.memory_limit_gb / $np rank(s) on this node"
+    [ ! -e "$W/r.h5" ] || fail "a refused run wrote its file"
+  done
+  ;;
 *)
   fail "unknown case $CASE"
   ;;
