@@ -70,6 +70,11 @@ int main(int argc, char** argv) {
   auto* e = app.add_subcommand("envs", "list the built-in environments");
   auto* keys = app.add_subcommand("keys", "every config key with its type, default, allowed range, unit and meaning (markdown)");
 
+  std::string schema_check;
+  auto* sch = app.add_subcommand("schema", "every group and dataset of a run file: type, axes, unit, meaning (markdown)");
+  sch->add_option("--check", schema_check, "instead, list where this run file differs from the schema (exit 1 if it does)")
+      ->check(CLI::ExistingFile);
+
   std::string cmp_a, cmp_b;
   auto* cmpc = app.add_subcommand("compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)");
   cmpc->add_option("a", cmp_a, "first file")->required()->check(CLI::ExistingFile);
@@ -126,6 +131,7 @@ int main(int argc, char** argv) {
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*keys) return std::printf("%s", io::schema_markdown().c_str()) < 0;
+    if (*sch) return cli::schema(schema_check);
     if (*g) return cli::gd_compare(gdc);
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*v) return mpi::run_main(argc, argv, evo);
