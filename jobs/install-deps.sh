@@ -9,7 +9,8 @@ PACKAGES=(
   libeigen3-dev libboost-serialization-dev
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
-  python3-h5py python3-numpy python3-matplotlib python3-scipy
+  python3-h5py python3-numpy python3-matplotlib python3-scipy python3-xarray
+  python3-pip python3-venv python3-setuptools
   shellcheck slurmctld slurmd slurm-client munge
 )
 
