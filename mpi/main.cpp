@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   auto* mv = app.add_subcommand("movie", "the paper's Supplementary Movie from a run file, as MP4 (ffmpeg)");
   mv->add_option("run", mov.run, "run file")->required()->check(CLI::ExistingFile);
   mv->add_option("--out", mov.out, "output folder");
-  mv->add_flag("--quick", mov.quick, "fewer and smaller frames");
+  mv->add_flag("--quick", mov.quick, "fewer frames and environments (tests)");
 
   cli::BenchArgs bench;
   auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");

@@ -21,7 +21,7 @@ Every episode is the scene file `divcoll export` writes and the trajectory `divc
 it; the travel drawn is checked against the run file's. On each frame: the environment's name and its cue
 (a wind arrow whose length follows the wind, ice / sand / sticky ground as texture and label, the treadmill's
 belt as moving marks), springs coloured by strain with a colour bar, the time stamp, travel so far in BL.
-Frames are 1280 × 720 (1024 × 576 with --quick, which also draws fewer frames).
+Frames are 1280 × 720 (--quick: fewer frames and environments, for tests).
 
 Exit status: 0 done; 2 bad input (not a run file, a missing stage, no ffmpeg) with a message.
 """
@@ -82,9 +82,7 @@ class Clip:
         self.title = title
         with h5py.File(scene, "r") as s:
             self.env_attrs = {k: float(v) for k, v in s["env"].attrs.items() if k != "name"}
-            x0 = s["masses/x0"][()]
-        mi = self.ep.mass_index
-        self.bl = float(np.mean([np.ptp(x0[row, 0]) for row in mi]))
+        self.bl = self.ep.bl
         self.stored_bl = stored_bl
         with h5py.File(traj, "r") as t:
             self.travel_u = float(t.attrs["travel"])
@@ -198,8 +196,7 @@ class Writer:
 def render(path, clips, heading, quick=False, every=20, fps=25, below=None, hold=1.0):
     """clips side by side, one frame every `every` steps of the longest; `below(ax, frame_step)` draws a strip
     under them (a curve with a moving marker); the last frame is held `hold` seconds"""
-    size = (10.24, 5.76) if quick else (12.8, 7.2)
-    fig = plt.figure(figsize=size, dpi=100)
+    fig = plt.figure(figsize=(12.8, 7.2), dpi=100)
     n = len(clips)
     top = 0.86
     bottom = 0.30 if below else 0.12
@@ -238,8 +235,8 @@ def render(path, clips, heading, quick=False, every=20, fps=25, below=None, hold
 
 
 def title_card(path, lines, quick=False, seconds=2.5, fps=25):
-    size = (10.24, 5.76) if quick else (12.8, 7.2)
-    fig = plt.figure(figsize=size, dpi=100)
+    fig = plt.figure(figsize=(12.8, 7.2), dpi=100)
+    seconds = 0.5 if quick else seconds
     fig.text(0.5, 0.62, lines[0], ha="center", va="center", fontsize=24, fontweight="bold")
     for i, ln in enumerate(lines[1:]):
         fig.text(0.5, 0.48 - 0.07 * i, ln, ha="center", va="center", fontsize=13, color="#333333")
@@ -327,7 +324,7 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
     work = os.path.join(out_dir, "episodes")
     os.makedirs(work, exist_ok=True)
     r = RunFile(runpath, divcoll, work)
-    every = 40 if quick else 20
+    every = 100 if quick else 20
     name = r.cfg.get("run", {}).get("name", "?")
     parts = []
 
@@ -370,7 +367,7 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
 
     # 3. deployment
     dep_steps = int(r.cfg["deploy"]["episode_steps"])
-    envs = [e for e in PREFERRED if e in r.envs][: (3 if quick else 6)]
+    envs = [e for e in PREFERRED if e in r.envs][: (2 if quick else 6)]
     card = os.path.join(out_dir, "card3.mp4")
     title_card(card, ["3. Deployment: uniform vs diverse", "no learning; flat is the training environment",
                       ", ".join(e.replace("_", " ") for e in envs)], quick)
@@ -402,7 +399,7 @@ def main(argv=None):
     ap.add_argument("run", nargs="?", help="divcoll run file with complete agents, connectors and deploy stages")
     ap.add_argument("--out", default=None, help="output folder (run mode, default out/movie) or MP4 (--episode)")
     ap.add_argument("--divcoll", default=os.path.join(HERE, "..", "build", "divcoll"), help="the divcoll binary")
-    ap.add_argument("--quick", action="store_true", help="smaller frames, fewer of them")
+    ap.add_argument("--quick", action="store_true", help="fewer frames and environments (tests)")
     ap.add_argument("--episode", nargs="+", metavar="FILE", help="scene and trajectory files, in pairs: render "
                     "these episodes side by side into --out")
     a = ap.parse_args(argv)

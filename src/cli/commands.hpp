@@ -55,7 +55,7 @@ int report(const ReportArgs& a);  // replaces the process with Python; returns o
 // divcoll movie RUN.h5 --out DIR: the paper's Supplementary Movie as MP4 (postprocess/movie.py, ffmpeg)
 struct MovieArgs {
   std::string run, out = "out/movie";
-  bool quick = false;  // fewer, smaller frames (tests)
+  bool quick = false;  // fewer frames and environments (tests)
 };
 int movie(const MovieArgs& a);  // replaces the process with Python; returns only by throwing
 
