@@ -140,6 +140,11 @@ int run_python(const std::string& script, const std::vector<std::string>& args) 
 }
 
 int report(const ReportArgs& a) {
+  // a study folder (divcoll study --out DIR) gets the robustness page, by default in DIR/robustness
+  if (fs::is_directory(a.run)) {
+    const std::string out = a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
+    return exec_python("robustness.py", {a.run, "--out", out});
+  }
   std::vector<std::string> args = {a.run, "--out", a.out};
   if (a.movie) args.push_back("--movie");
   return exec_python("report.py", args);
