@@ -3,7 +3,7 @@
 jobs/bench-farm.sh (`divcoll bench-farm` at 8, 16, 32 ranks).
 
     /usr/bin/python3 postprocess/farm_model.py OUT/farm.csv [--paper configs/paper.toml] [--ranks 64 512]
-                                               [--item-ms 12.5 6.25]
+                                               [--item-ms 12.5 6.25] [--pairs-per-item 1]
 
 One round of n items of t seconds on p ranks: the master only coordinates (W = p - 1 workers; with p <= 2
 it computes too, W = p). It sends every worker its first block one message after another, then answers
@@ -18,6 +18,9 @@ round and the result size are the paper config's connectors and specialists trai
 episode with gradient per item; its result is the connector's gradient, 1473 doubles). Assumes a network
 whose per-message CPU cost at the master is no higher than this machine's shared memory, and leaves out
 what a round does besides the farm (broadcasting weights, HDF5 writes, checkpoints: see the README).
+--pairs-per-item b models items of b pair episodes whose gradients the worker sums (n / b items of b t,
+each still one gradient to serve and fold): a granularity the stages do not use today (it would change
+the order of the gradient sums, so run files would change once).
 Exit status 2 on bad input.
 """
 import argparse
@@ -73,12 +76,13 @@ def paper_rounds(path):
             "specialists": novel * s["replicates"] * c["batch_pairs"]}
 
 
-def table(costs, rounds, ranks, item_ms):
+def table(costs, rounds, ranks, item_ms, pairs_per_item=(1,)):
     top, rows = costs
     lines = ["| round | items | item (ms) | fold | " + " | ".join(f"{p} ranks" for p in ranks) + " |",
              "|---|---|---|---|" + "---|" * len(ranks)]
-    for stage, n in rounds.items():
-        for ms in item_ms:
+    for stage, pairs in rounds.items():
+        for b, ms in [(b, b * t) for b in pairs_per_item for t in item_ms]:
+            n = -(-pairs // b)
             for fold in ("after", "during"):
                 if fold not in rows:
                     continue
@@ -89,7 +93,8 @@ def table(costs, rounds, ranks, item_ms):
                 for p in ranks:
                     T, e = round_time(n, ms * 1e-3, p, c_serve, float(r["task_us_per_msg"]), c_fold)
                     cells.append(f"{e:.0%} ({T * 1e3:.0f} ms)")
-                lines.append(f"| {stage} training | {n} | {ms:g} | {fold} the round | " + " | ".join(cells) + " |")
+                what = f"{stage} training" + (f", {b} pairs per item" if b > 1 else "")
+                lines.append(f"| {what} | {n} | {ms:g} | {fold} the round | " + " | ".join(cells) + " |")
     after = rows["after"]
     caption = (f"Costs from the {top}-rank rows: c_serve = {float(after['master_cpu_us_per_item']):.2f} µs per item "
                f"(fold after)" + (f", {float(rows['during']['master_cpu_us_per_item']):.2f} µs with the fold during the "
@@ -106,13 +111,15 @@ def main(argv=None):
     ap.add_argument("--ranks", type=int, nargs="+", default=[64, 512])
     ap.add_argument("--item-ms", type=float, nargs="+", default=[12.5, 6.25],
                     help="ms of one item (pair episode with gradient): 12.5 at 80k pair-steps/s, 6.25 at twice that")
+    ap.add_argument("--pairs-per-item", type=int, nargs="+", default=[1],
+                    help="pair episodes per item, their gradients summed by the worker (1: today's stages)")
     a = ap.parse_args(argv)
     try:
-        if any(p < 1 for p in a.ranks) or any(t <= 0 for t in a.item_ms):
-            raise InputError("--ranks and --item-ms must be positive")
+        if any(p < 1 for p in a.ranks) or any(t <= 0 for t in a.item_ms) or any(b < 1 for b in a.pairs_per_item):
+            raise InputError("--ranks, --item-ms and --pairs-per-item must be positive")
         if not os.path.isfile(a.paper):
             raise InputError(f"{a.paper}: no such config")
-        lines, caption = table(read_costs(a.csv), paper_rounds(a.paper), a.ranks, a.item_ms)
+        lines, caption = table(read_costs(a.csv), paper_rounds(a.paper), a.ranks, a.item_ms, a.pairs_per_item)
     except (InputError, KeyError, ValueError, tomllib.TOMLDecodeError) as e:
         print(f"farm_model: {e}", file=sys.stderr)
         return 2
