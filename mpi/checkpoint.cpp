@@ -79,21 +79,39 @@ bool valid_run_file(const std::string& path, std::string* why) {
       if (why) *why = "not a complete divcoll run file";
       return false;
     }
-    // every dataset must read back
-    int bad = 0;
+    // every dataset must read back (HDF5 checks each one's Fletcher-32 checksum on the way)
+    struct Bad {
+      int count = 0;
+      std::string first, reason;
+    } bad;
     auto visit = [](hid_t obj, const char* name, const H5O_info_t* info, void* data) -> herr_t {
       if (info->type != H5O_TYPE_DATASET) return 0;
+      Bad& b = *static_cast<Bad*>(data);
       io::h5::Handle d(H5Dopen2(obj, name, H5P_DEFAULT), H5Dclose);
-      if (!d.valid()) return ++*static_cast<int*>(data), 0;
-      io::h5::Handle space(H5Dget_space(d.id()), H5Sclose);
-      io::h5::Handle type(H5Dget_type(d.id()), H5Tclose);
-      const size_t n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.id())) * H5Tget_size(type.id());
-      std::string buf(n, '\0');
-      if (n > 0 && H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) ++*static_cast<int*>(data);
+      bool ok = d.valid();
+      if (ok) {
+        io::h5::Handle space(H5Dget_space(d.id()), H5Sclose);
+        io::h5::Handle type(H5Dget_type(d.id()), H5Tclose);
+        const size_t n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.id())) * H5Tget_size(type.id());
+        std::string buf(n, '\0');
+        ok = n == 0 || H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) >= 0;
+      }
+      if (!ok && b.count++ == 0) {
+        b.first = name;
+        auto walk = [](unsigned k, const H5E_error2_t* err, void* out) -> herr_t {
+          if (k == 0 && err && err->desc) *static_cast<std::string*>(out) = err->desc;
+          return 0;
+        };
+        H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, walk, &b.reason);
+      }
+      H5Eclear2(H5E_DEFAULT);
       return 0;
     };
-    if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &bad) < 0 || bad > 0) {
-      if (why) *why = "some of its datasets do not read back";
+    if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &bad) < 0 || bad.count > 0) {
+      if (why)
+        *why = bad.count == 0 ? std::string("its datasets cannot be listed")
+                              : std::to_string(bad.count) + " of its datasets do not read back or fail their checksum (the first: " + bad.first +
+                                    (bad.reason.empty() ? "" : ": " + bad.reason) + ")";
       return false;
     }
     return true;

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -140,6 +141,30 @@ void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std
   };
   if (!existing.empty()) note_complete(existing, "");
   if (!args.from.empty()) note_complete(args.base, args.from);
+  // stored values that the stages to run read, where no NaN or Inf may be (a finished stage's weights
+  // and bodies; a running stage's checkpointed optimizer state)
+  const std::string source = !existing.empty() ? existing : args.base;
+  if (!source.empty()) {
+    io::h5::File f = io::h5::File::open(source);
+    std::vector<std::string> finite;
+    if (present.count("agents"))
+      for (const char* d : {"params", "rest_pos", "rest_length", "amplitude"}) finite.push_back(std::string("agents/final/") + d);
+    if (present.count("connectors"))
+      for (const std::string& kind : cfg.connectors.kinds) finite.push_back("connectors/" + kind + "/params");
+    if (!existing.empty() && io::stage_enabled(cfg, "connectors") && !present.count("connectors"))
+      for (const char* d : {"params", "adam_m", "adam_v"}) finite.push_back(std::string("connectors/state/") + d);
+    for (const std::string& d : finite) {
+      if (!f.has(d)) continue;
+      const std::vector<double> v = f.read<double>(d);
+      size_t bad = 0, first = 0;
+      for (size_t i = v.size(); i-- > 0;)
+        if (!std::isfinite(v[i])) ++bad, first = i;
+      if (bad > 0)
+        throw InputError(msg() << source << ": " << d << " holds " << bad << " non-finite value(s) (the first at flat index "
+                               << first << ") where none may be; the stored stage is damaged: rerun it into a new "
+                               << "file (--from, or a new run) instead of continuing this one");
+    }
+  }
   const std::string where = !existing.empty() ? existing : !args.from.empty() ? args.base : std::string();
   for (const auto& [stage, needs] : stage_inputs()) {
     const bool runs = args.agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);

@@ -3,7 +3,8 @@
 // Handles (hid_t) are closed in destructors and are move-only. HDF5's automatic error printing is
 // turned off; every failure becomes a divcoll::InputError whose message names the file and the object
 // ("runs/a.h5: masses/x0: ..."), with HDF5's own innermost reason appended where it has one.
-// Datasets are contiguous, written in one piece; files are opened for serial access unless the caller
+// Datasets are chunked along their first dimension (about 1 MiB a chunk) with HDF5's Fletcher-32 checksum,
+// which HDF5 checks on every read (scalar and empty ones are contiguous); collective writes under MPI-IO; files are opened for serial access unless the caller
 // passes a file access property list (e.g. an MPI-IO one). A dataset created in a run file gets the
 // attributes of its row of the run-file schema (io/run_file.hpp).
 #pragma once

@@ -241,6 +241,32 @@ memory)
     [ ! -e "$W/r.h5" ] || fail "a refused run wrote its file"
   done
   ;;
+checked_values)
+  # every dataset carries HDF5's Fletcher-32 checksum; stored inputs of the stages to run must be finite
+  try mpirun -np 2 "$D" run "$CFG" 'run.stages=["agents","connectors"]' --out "$W/a.h5"
+  [ "$rc" = 0 ] || fail "run: $out"
+  [ "$(h5dump -p -H "$W/a.h5" | grep -c FLETCHER32)" -gt 0 ] || fail "no checksum filter on the datasets"
+  cp "$W/a.h5" "$W/bytes.h5"
+  cp "$W/a.h5" "$W/nan.h5"
+  # (a) random bytes written over the stored weights, behind HDF5's back
+  /usr/bin/python3 - "$W/bytes.h5" << 'PY' || fail "corrupting"
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    info = f["agents/final/params"].id.get_chunk_info(0)
+with open(sys.argv[1], "r+b") as raw:
+    raw.seek(info.byte_offset + 1000)
+    raw.write(bytes(range(7, 71)))
+PY
+  try "$D" run "$CFG" 'run.stages=["agents","connectors","deploy"]' --out "$W/bytes.h5" --resume
+  expect 2 "do not read back or fail their checksum (the first: agents/final/params"
+  grep -qi "checksum" <<< "$out" || fail "the message does not name the checksum: $out"
+  /usr/bin/python3 -c "import h5py; h5py.File('$W/bytes.h5', 'r')['agents/final/params'][...]" 2> /dev/null &&
+    fail "h5py read the damaged dataset without complaint"
+  # (b) a NaN written through HDF5 (a valid checksum): refused before the stage that reads it, at 2 ranks
+  /usr/bin/python3 -c "import h5py; f = h5py.File('$W/nan.h5', 'a'); d = f['agents/final/params']; d[1, 5] = float('nan')" || fail "h5py"
+  try mpirun -np 2 "$D" run "$CFG" 'run.stages=["agents","connectors","deploy"]' --out "$W/nan.h5" --resume
+  expect 2 "agents/final/params holds 1 non-finite value(s)"
+  ;;
 *)
   fail "unknown case $CASE"
   ;;
