@@ -199,7 +199,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   if (res.status != Status::ok) {
     res.travel = std::numeric_limits<double>::quiet_NaN();
     if (opt.grad) {
-      res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+      if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
       res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
       res.grad_x0.assign(N2, 0.0);
       res.grad_rest_length.assign(S, 0.0);
@@ -227,7 +227,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   }
 
   // ---- backward ------------------------------------------------------------------------------------
-  res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+  if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
   res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
   res.grad_rest_length.assign(S, 0.0);
   double* Lbar = res.grad_rest_length.data();
@@ -258,8 +258,8 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       std::swap(vbar, vbar_prev);
     }
     ControlBuffers cb{&agent_acts[static_cast<size_t>(t) * m.A * na], &conn_acts[static_cast<size_t>(t) * nc]};
-    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar, res.grad_agent_params.data(), gc,
-                    scratch.data());
+    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar,
+                    opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc, scratch.data());
   }
   // x0 is both the initial state and travel's baseline
   res.grad_x0.assign(xbar, xbar + N2);
