@@ -8,6 +8,7 @@
 #include "common/check.hpp"
 #include "io/config.hpp"
 #include "mpi/run_cmd.hpp"
+#include "mpi/study_cmd.hpp"
 
 int main(int argc, char** argv) {
   using namespace divcoll;
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
 
   cli::ReportArgs rep;
   auto* rp = app.add_subcommand("report", "one page with the paper's claims beside a run file's numbers, and every figure");
-  rp->add_option("run", rep.run, "run file")->required()->check(CLI::ExistingFile);
+  rp->add_option("run", rep.run, "run file, or a study folder (the robustness page)")->required()->check(CLI::ExistingPath);
   rp->add_option("--out", rep.out, "output folder (report.md, table_s1.md, figures/)");
 
   cli::BenchArgs bench;
@@ -99,6 +100,12 @@ int main(int argc, char** argv) {
   r->add_option("--base", run.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
   evo.agents_only = true;
 
+  mpi::StudyArgs study;
+  auto* st = app.add_subcommand("study", "one run file per (variant, seed) of a study file, reusing shared stages (MPI)");
+  st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml")->required()->check(CLI::ExistingFile);
+  st->add_option("--out", study.out, "study folder (manifest study.toml, <variant>/seed<k>.h5)")->required();
+  st->add_flag("--resume", study.resume, "continue a study that was interrupted");
+
   // a mistyped command is named, with the list of commands
   std::string known;
   bool found = false;
@@ -130,6 +137,7 @@ int main(int argc, char** argv) {
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*v) return mpi::run_main(argc, argv, evo);
     if (*r) return mpi::run_main(argc, argv, run);
+    if (*st) return mpi::study_main(argc, argv, study);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());
     return 2;

@@ -35,14 +35,18 @@ fs::path find_report_script() {
 }  // namespace
 
 int report(const ReportArgs& a) {
-  const fs::path script = find_report_script();
+  fs::path script = find_report_script();
+  // a study folder (divcoll study --out DIR) gets the robustness page, by default in DIR/robustness
+  const bool study = fs::is_directory(a.run);
+  if (study) script = script.parent_path() / "robustness.py";
+  const std::string out = study && a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
   const char* python = "/usr/bin/python3";
   DIVCOLL_THROW_UNLESS(::access(python, X_OK) == 0,
                        python << " is missing: install Debian's python3-h5py python3-numpy python3-matplotlib "
                                  "python3-scipy (jobs/install-deps.sh does)");
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  std::vector<std::string> args = {python, script.string(), a.run, "--out", a.out};
+  std::vector<std::string> args = {python, script.string(), a.run, "--out", out};
   if (!ec) args.insert(args.end(), {"--divcoll", self.string()});
   std::vector<char*> argv;
   for (auto& s : args) argv.push_back(s.data());
