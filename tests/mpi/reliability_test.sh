@@ -98,7 +98,7 @@ kill_launcher)
   kill -9 "$job"
   wait "$job" 2> /dev/null
   try "$D" evolve "$CFG" "${EVO[@]}" --out "$W/k.h5" --resume
-  expect 2 "is being written by"
+  expect 2 "being written by"
   "$D" compare "$W/k.h5.ckpt" "$W/k.h5.ckpt" > /dev/null || fail "the checkpoint does not read back"
   kill -9 $ranks 2> /dev/null
   while [ -n "$(pids_of "$W/k.h5")" ]; do sleep 0.05; done
