@@ -48,7 +48,4 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
 void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint);
 
-// the final population of a run file's agents stage (rank-local read)
-std::vector<evo::Individual> read_final_population(const io::h5::Node& file, const std::string& group = "agents");
-
 }  // namespace divcoll::mpi

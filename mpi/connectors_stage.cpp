@@ -5,10 +5,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numeric>
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "morph/body.hpp"
+#include "io/run_read.hpp"
 #include "mpi/agents_stage.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
@@ -49,12 +51,18 @@ void bcast_doubles(MPI_Comm comm, std::vector<double>& v) {
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file, const std::string& group) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
+  // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
+  // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
+  const bool stored = group == "agents" && file.has(kAnchors);
   std::vector<collective::Agent> agents;
-  if (rank == 0)
-    for (const evo::Individual& x : read_final_population(file, group)) agents.push_back(x.agent);
+  if (rank == 0) {
+    for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
+    if (stored) io::read_anchors(file, kAnchors, agents);
+  }
   agents = broadcast(comm, agents);
-  // anchors from each agent's own 1000-step run on flat: the same on every rank
-  for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+  // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
+  if (!stored)
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a);
   return agents;
 }
 
@@ -257,16 +265,12 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   stage.write_string("status", "running");
   stage.write_string("kinds", join(kinds));
   stage.write_int("replicates", R);
-  if (!file.has("connectors/anchors")) {
-    std::vector<int64_t> rows;
-    std::vector<int32_t> an;
-    if (rank == 0)
-      for (int i = 0; i < pop; ++i) {
-        rows.push_back(i);
-        const auto& x = agents[i].anchors;
-        an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
-      }
-    file.write_rows<int32_t>("connectors/anchors", {static_cast<hsize_t>(pop), 4}, rows, an);
+  if (!file.has(kAnchors)) {
+    std::vector<int64_t> rows(pop);
+    std::iota(rows.begin(), rows.end(), 0);
+    if (rank != 0) rows.clear();
+    file.write_rows<int32_t>(kAnchors, {static_cast<hsize_t>(pop), 4}, rows,
+                             rank == 0 ? io::anchors_rows(agents) : std::vector<int32_t>{});
   }
   // connector c = kind·R + replicate, trained on flat
   std::vector<ConnectorSlot> slots;

@@ -46,16 +46,6 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
   return idx;
 }
 
-// the connector weights of one kind, (replicates × P_c), from the run file
-std::vector<std::vector<double>> read_weights(const io::h5::File& file, const std::string& group, int replicates) {
-  const int Pc = sim::connector_param_count();
-  DIVCOLL_THROW_UNLESS(file.has(group + "/params"), file.file() << " has no " << group << "/params: run the stage that trains them first");
-  const std::vector<double> w = file.read<double>(group + "/params", Dims{static_cast<hsize_t>(replicates), static_cast<hsize_t>(Pc)});
-  std::vector<std::vector<double>> out;
-  for (int r = 0; r < replicates; ++r) out.emplace_back(w.begin() + r * Pc, w.begin() + (r + 1) * Pc);
-  return out;
-}
-
 // farms pair (or, with `chains`, heap-order chain) episodes, forward only, and returns their outcomes on rank 0
 std::vector<EpisodeDone> run_episodes(MPI_Comm comm, const std::vector<GroupEpisode>& episodes,
                                       const std::vector<collective::Agent>& agents,
@@ -175,8 +165,8 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
   const std::vector<collective::Agent> agents = load_population(comm, file);
   const int pop = static_cast<int>(agents.size());
   // weights 0..R−1: weak uniform-trained; R..2R−1: weak diverse-trained
-  std::vector<std::vector<double>> weights = read_weights(file, "connectors/weak_uniform", R);
-  for (auto& w : read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
+  std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
+  for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
 
   if (!file.has("scaling")) file.create_group("scaling");
   io::h5::Node stage = file.group("scaling");
@@ -267,7 +257,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   // genotype among its agents of that body
   uint32_t shape = 0, springs = 0;
   {
-    const auto main = read_final_population(file);
+    const auto main = io::read_final_population(file);
     std::map<uint32_t, int> bodies;
     for (const auto& x : main) ++bodies[x.agent.cells];
     int best = -1;
