@@ -25,11 +25,12 @@
 #include "evo/evolution.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
-inline constexpr uint64_t kAgentsStage = 1000;
+inline constexpr uint64_t kAgentsStage = io::stage_stream("agents");
 
 // where and how a population is evolved: the main one (defaults) or a graded-diversity one (SPEC §7.5)
 struct AgentsSpec {

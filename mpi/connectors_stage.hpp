@@ -20,10 +20,11 @@
 #include "collective/builders.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
-inline constexpr uint64_t kConnectorsStage = 2000;
+inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
 // where the main population's anchors are stored (written by this stage, read by every later one)
 inline constexpr const char* kAnchors = "connectors/anchors";
 

@@ -8,6 +8,7 @@
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/run_read.hpp"
 #include "mpi/agents_stage.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
@@ -106,7 +107,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   std::vector<ConnectorSlot> slots;
   for (int e = 0; e < E; ++e)
     for (int r = 0; r < R; ++r)
-      slots.push_back({cfg.connectors.weak_stiffness, true, envs[e], kSpecialistsStage + e * R + r,
+      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
                        "specialists/" + envs[e], r});
   TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
@@ -121,7 +122,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
         for (const auto& [a, b] : pairs) eps.push_back({e * R + r, e, {a, b}});
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<EpisodeDone> d =
-      run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, cfg.deploy.episode_steps, false);
+      run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
   std::vector<int64_t> rows;
   std::vector<double> tu, tb;
   std::vector<uint8_t> st;
@@ -208,7 +209,7 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
           for (int r = 0; r < R; ++r)
             for (int q = 0; q < D; ++q) eps.push_back({v * R + r, ei, chains[si * 2 + v][static_cast<size_t>(r) * D + q]});
     const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, Sc.episode_steps, true);
+        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_uniform"), envs, Sc.episode_steps, true);
     std::vector<int64_t> rows;
     std::vector<double> tu, tb;
     std::vector<uint8_t> st;
@@ -310,7 +311,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
     std::vector<ConnectorSlot> slots;
     for (int r = 0; r < R; ++r)
-      slots.push_back({cfg.connectors.weak_stiffness, true, "flat", kGradedStage + 100000 * v + 50000 + r,
+      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
                        base + "/connectors/weak_diverse", r});
     TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
                  cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
@@ -335,7 +336,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
           for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
     }
     const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, cfg.deploy.episode_steps, false);
+        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
     std::vector<int64_t> rows;
     std::vector<double> au, ab, pu, pb;
     std::vector<uint8_t> as, ps;

@@ -9,6 +9,7 @@
 #include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/config.hpp"
+#include "io/pipeline.hpp"
 #include "io/h5.hpp"
 #include "io/run_read.hpp"
 #include "io/scene_file.hpp"
@@ -78,7 +79,7 @@ int export_scene(const ExportArgs& a) {
       const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
       const int p = diverse ? dp[2 * a.pair] : a.pair, q = diverse ? dp[2 * a.pair + 1] : a.pair;
       with_anchors();
-      const double k = kind.rfind("weak", 0) == 0 ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness;
+      const double k = io::stiffness(cfg, kind);
       s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,
                                  a.env);
       idx = {e, t, a.replicate, a.pair};
@@ -95,7 +96,7 @@ int export_scene(const ExportArgs& a) {
     const int p = dp[2 * a.pair], q = dp[2 * a.pair + 1];
     with_anchors();
     s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "specialists/" + a.env, a.replicate),
-                               cfg.connectors.weak_stiffness, a.env);
+                               io::stiffness(cfg, "weak_diverse"), a.env);
     idx = {e, a.replicate, a.pair};
     steps = cfg.deploy.episode_steps;
     stage = "specialists";
@@ -123,7 +124,7 @@ int export_scene(const ExportArgs& a) {
     std::vector<const collective::Agent*> ptr;
     for (int32_t m : members) ptr.push_back(&agents[m]);
     s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
-                                cfg.connectors.weak_stiffness, a.env);
+                                io::stiffness(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);
     idx = {e, si, v, a.replicate, a.draw};
     steps = cfg.scaling.episode_steps;
     stage = "scaling";

@@ -7,6 +7,7 @@
 #include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/environments.hpp"
+#include "io/pipeline.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "morph/body.hpp"
@@ -56,20 +57,13 @@ int simulate(const SimulateArgs& a) {
   return r.status == sim::Status::ok ? 0 : 3;
 }
 
-namespace {
-double stiffness_of(const std::string& kind) {
-  if (kind == "weak") return collective::kWeakConnector;
-  if (kind == "strong") return collective::kStrongConnector;
-  throw InputError(msg() << "--connector must be weak or strong (got '" << kind << "')");
-}
-}  // namespace
-
 int scene(const SceneArgs& a) {
   check_output_path(a.out, a.force);
   io::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const double k = stiffness_of(a.connector);
+  const double k = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config),
+                                         a.connector);
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
