@@ -38,6 +38,8 @@ struct MpiSession {
   ~MpiSession() { MPI_Finalize(); }
 };
 
+}  // namespace
+
 // the sections whose keys decide what a stage computes (beside run.seed, which every stage uses)
 std::vector<std::string> sections_before(const std::string& stage) {
   std::vector<std::string> out;
@@ -60,6 +62,8 @@ std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& no
   }
   return diff;
 }
+
+namespace {
 
 // rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
 void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
@@ -94,6 +98,10 @@ void derive_run_file(const std::string& base, const std::string& path, const std
 
 int run_main(int argc, char** argv, const RunArgs& args) {
   MpiSession session(argc, argv);
+  return run_session(args);
+}
+
+int run_session(const RunArgs& args) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
