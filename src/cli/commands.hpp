@@ -4,10 +4,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
-<<<<<<< HEAD
 #include <utility>
-=======
->>>>>>> main
 #include <vector>
 
 namespace divcoll::cli {
