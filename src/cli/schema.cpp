@@ -3,6 +3,7 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "common/check.hpp"
 #include "io/h5.hpp"
 #include "io/run_file.hpp"
 
@@ -11,6 +12,9 @@ namespace divcoll::cli {
 int schema(const std::string& check) {
   if (check.empty()) return std::printf("%s", io::run_file::markdown().c_str()) < 0;
   const io::h5::File f = io::h5::File::open(check);
+  if (!f.has_attribute("format") || f.read_string("format") != io::run_file::kFormat)
+    throw InputError(check + " is not a divcoll run file (its root attribute format is not \"" +
+                     io::run_file::kFormat + "\")");
   const auto problems = io::run_file::check(f);
   for (const std::string& p : problems) std::printf("%s\n", p.c_str());
   std::printf("%s: %s\n", check.c_str(),

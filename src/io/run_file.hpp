@@ -11,13 +11,15 @@
 // labelled axis, `labels_<axis>` (comma separated); a dataset without a row, of another element type or
 // another number of dimensions is an internal error there. check() compares a whole file with the table.
 //
-// A stage that writes rows "through the schema" asks shape() for the dims of a path from its axis lengths:
-//   file.write_rows<double>(p, run_file::shape(p, {{"env", E}, {"type", T}, {"replicate", R}, {"pair", NP}}), rows, v)
+// A stage that writes rows "through the schema" names its axis lengths, and the table gives the dims:
+//   run_file::write_rows<double>(file, p, {{"env", E}, {"type", T}, {"replicate", R}, {"pair", NP}}, rows, v)
+// (or file.write_rows<double>(p, run_file::shape(p, {...}), rows, v)).
 #pragma once
 
 #include <map>
 #include <string>
 #include <string_view>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -65,6 +67,14 @@ const Entry& dataset(std::string_view path);
 // dims of dataset `path` in its axes' order: fixed axes from the table, the others from `lengths`
 // (std::logic_error naming the axis if one is missing)
 h5::Dims shape(std::string_view path, const std::map<std::string, hsize_t>& lengths);
+
+// creates (or writes in place) dataset `path` of the root `file` with the dims shape() gives, and writes the
+// listed rows (h5::Node::write_rows: with MPI-IO every rank calls it); the schema's attributes come with it
+template <class T>
+void write_rows(const h5::File& file, const std::string& path, const std::map<std::string, hsize_t>& lengths,
+                const std::vector<int64_t>& rows, const std::vector<T>& packed) {
+  file.write_rows<T>(path, shape(path, lengths), rows, packed);
+}
 
 // the string attributes a new dataset of a run file gets (axes, unit, doc, labels_<axis>); none when
 // `root` is not a run file. std::logic_error if the dataset has no row or disagrees with it (element

@@ -148,6 +148,23 @@ TEST_F(RunFileWrite, ANewDatasetGetsItsRowsAttributesAndLabels) {
   EXPECT_EQ(attr("deploy/diverse_pairs", "doc"), dataset("deploy/diverse_pairs").doc);
 }
 
+TEST_F(RunFileWrite, WriteRowsThroughTheSchemaTakesTheDimsFromTheAxes) {
+  h5::File f = run_file("w.h5");
+  // 2 environments (the group's labels) x 3 types x 1 replicate x 2 pairs; rank 0 writes both rows
+  std::vector<double> v(12);
+  for (size_t k = 0; k < v.size(); ++k) v[k] = 0.5 * static_cast<double>(k);
+  write_rows<double>(f, "deploy/collectives/travel_u", {{"env", 2}, {"type", 3}, {"replicate", 1}, {"pair", 2}}, {0, 1}, v);
+  EXPECT_EQ(f.dims("deploy/collectives/travel_u"), (D{2, 3, 1, 2}));
+  EXPECT_EQ(f.read<double>("deploy/collectives/travel_u"), v);
+  // fixed axes need no length; a missing one is an internal error
+  write_rows<int32_t>(f, "deploy/diverse_pairs", {{"pair", 1}}, {0}, {4, 5});
+  EXPECT_EQ(f.dims("deploy/diverse_pairs"), (D{1, 2}));
+  EXPECT_THROW(write_rows<double>(f, "deploy/agents/travel_u", {{"agent", 3}}, {}, {}), std::logic_error);
+  f.close();
+  const auto problems = check(h5::File::open(path("w.h5")));
+  EXPECT_TRUE(problems.empty()) << ::testing::PrintToString(problems);
+}
+
 TEST_F(RunFileWrite, ADatasetTheSchemaDoesNotHaveIsRefused) {
   h5::File f = run_file("b.h5");
   const auto refused = [&](auto write, const std::string& what) {
