@@ -172,7 +172,9 @@ int demo(const DemoArgs& a) {
       DIVCOLL_THROW_UNLESS(e < static_cast<int>(envs.size()), a.run << " has no deployment in " << env);
       io::h5::Dims d;
       const std::vector<double> bl = f.read<double>("deploy/collectives/travel_bl", &d);
-      const double stored = bl[((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q];
+      const size_t at = ((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q;
+      const double stored = bl[at];
+      const double stored_u = f.read<double>("deploy/collectives/travel_u")[at];
       const sim::Scene s = io::read_scene(ex.out);
       sim::RunOptions opt;
       opt.steps = cfg.deploy.episode_steps;
@@ -184,7 +186,8 @@ int demo(const DemoArgs& a) {
       char row[512];
       std::snprintf(row, sizeof row, "%-12s %10.4f %10.4f %10s %16.4f  %s%s\n", env.c_str(), r.travel, got,
                     sim::status_name(r.status), stored, traj.c_str(),
-                    (std::isnan(stored) && std::isnan(got)) || stored == got ? "" : "  (differs from the run file!)");
+                    (std::isnan(stored_u) && std::isnan(r.travel)) || stored_u == r.travel ? ""
+                                                                                : "  (differs from the run file!)");
       rows.push_back(row);
       episodes.emplace_back(ex.out, traj);
     }
