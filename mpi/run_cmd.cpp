@@ -25,6 +25,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "io/file_lock.hpp"
+#include "io/pipeline.hpp"
 #include "mpi/agents_stage.hpp"
 #include "mpi/agree.hpp"
 #include "mpi/analysis_stage.hpp"
@@ -209,7 +210,7 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
       const std::vector<double> w = morph::init_connector_params(rng);
       double k = cfg.connectors.weak_stiffness;
       for (const std::string& kind : cfg.connectors.kinds)
-        if (!collective::kind_is_weak(kind) && io::stage_enabled(cfg, "connectors")) k = cfg.connectors.strong_stiffness;
+        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
       std::vector<std::string> envs = {"flat"};
       if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
       for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, k, env), cfg.connectors.episode_steps, "connectors.episode_steps");
