@@ -18,7 +18,7 @@
 #include "collective/builders.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
-#include "common/memory.hpp"
+#include "io/memory.hpp"
 #include "common/rng.hpp"
 #include "morph/body.hpp"
 #include "common/version.hpp"

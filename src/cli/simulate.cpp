@@ -8,7 +8,7 @@
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "common/check.hpp"
-#include "common/memory.hpp"
+#include "io/memory.hpp"
 #include "io/config.hpp"
 #include "io/environments.hpp"
 #include "io/h5.hpp"

@@ -1,4 +1,4 @@
-#include "common/memory.hpp"
+#include "io/memory.hpp"
 
 #include <algorithm>
 #include <cstdio>
