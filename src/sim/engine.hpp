@@ -34,6 +34,9 @@ const char* status_name(Status s);
 struct RunOptions {
   int steps = 1000;              // control steps T
   bool grad = false;             // reverse-mode gradient of travel (keeps a tape)
+  int grad_window = 0;           // truncated backpropagation: > 0 cuts the adjoint of the state every this many
+                                 // steps (the gradient of travel's per-window displacements, each window's start
+                                 // state held fixed); 0 = the full gradient
   bool record = false;           // keep x, v, touch at every step for output
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
