@@ -7,7 +7,9 @@
 #include "cli/commands.hpp"
 #include "common/check.hpp"
 #include "io/config.hpp"
+#include "mpi/bench_farm.hpp"
 #include "mpi/run_cmd.hpp"
+#include "mpi/study_cmd.hpp"
 
 int main(int argc, char** argv) {
   using namespace divcoll;
@@ -55,20 +57,48 @@ int main(int argc, char** argv) {
   d->add_option("--out", demo.out, "output folder");
   d->add_option("--env", demo.env, "the novel environment");
   d->add_option("--seed", demo.seed, "random seed");
-  d->add_option("--steps", demo.steps, "steps per episode")->check(CLI::Range(1, 10000000));
+  d->add_option("--steps", demo.steps, "steps per episode (without --run)")->check(CLI::Range(1, 10000000));
+  d->add_option("--run", demo.run, "run file whose trained agents and connector to use")->check(CLI::ExistingFile);
+  d->add_flag("--movie", demo.movie, "also render the episodes as MP4 (ffmpeg)");
 
   cli::ReportArgs rep;
   auto* rp = app.add_subcommand("report", "one page with the paper's claims beside a run file's numbers, and every figure");
-  rp->add_option("run", rep.run, "run file")->required()->check(CLI::ExistingFile);
-  rp->add_option("--out", rep.out, "output folder (report.md, table_s1.md, figures/)");
+  rp->add_option("run", rep.run, "run file, or a study folder (the robustness page)")->required()->check(CLI::ExistingPath);
+  rp->add_option("--out", rep.out, "output folder (report.md, report.html, table_s1.md, figures/)");
+  rp->add_flag("--movie", rep.movie, "also render the supplementary movie (MP4, ffmpeg) into the page");
+
+  cli::MovieArgs mov;
+  auto* mv = app.add_subcommand("movie", "the paper's Supplementary Movie from a run file, as MP4 (ffmpeg)");
+  mv->add_option("run", mov.run, "run file")->required()->check(CLI::ExistingFile);
+  mv->add_option("--out", mov.out, "output folder");
+  mv->add_flag("--quick", mov.quick, "fewer frames and environments (tests)");
 
   cli::BenchArgs bench;
   auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
   b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
   b->add_flag("--quick", bench.quick, "fewer rows");
 
+  mpi::BenchFarmArgs bf;
+  auto* bfc = app.add_subcommand("bench-farm", "the task farm's master alone: cost per item at any rank count (MPI)");
+  bfc->add_option("--item-ms", bf.item_ms, "cost of one synthetic item, ms (a sleep)")->check(CLI::Range(0.0, 60000.0));
+  bfc->add_option("--result-bytes", bf.result_bytes, "bytes of one result")->check(CLI::Range(0, 1 << 28));
+  bfc->add_option("--task-bytes", bf.task_bytes, "bytes of one task")->check(CLI::Range(0, 1 << 28));
+  bfc->add_option("--items", bf.items, "items per round")->check(CLI::Range(0, 100000000));
+  bfc->add_option("--rounds", bf.rounds, "rounds measured (after one warm-up round)")->check(CLI::Range(1, 100000));
+  bfc->add_option("--block", bf.block, "items per task message (0: guided)")->check(CLI::Range(0, 1000000));
+  bfc->add_option("--max-block", bf.max_block, "largest guided block")->check(CLI::Range(1, 1000000));
+  bfc->add_option("--depth", bf.depth, "blocks a worker holds at once")->check(CLI::Range(1, 64));
+  bfc->add_option("--fold", bf.fold, "master folds results: none, after the round, during it")
+      ->check(CLI::IsMember({"none", "after", "during"}));
+  bfc->add_flag("--master-works", bf.master_works, "the master computes items too");
+
   auto* e = app.add_subcommand("envs", "list the built-in environments");
   auto* keys = app.add_subcommand("keys", "every config key with its type, default, allowed range, unit and meaning (markdown)");
+
+  std::string schema_check;
+  auto* sch = app.add_subcommand("schema", "every group and dataset of a run file: type, axes, unit, meaning (markdown)");
+  sch->add_option("--check", schema_check, "instead, list where this run file differs from the schema (exit 1 if it does)")
+      ->check(CLI::ExistingFile);
 
   std::string cmp_a, cmp_b;
   auto* cmpc = app.add_subcommand("compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)");
@@ -124,6 +154,12 @@ int main(int argc, char** argv) {
   r->add_option("--base", run.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
   evo.agents_only = true;
 
+  mpi::StudyArgs study;
+  auto* st = app.add_subcommand("study", "one run file per (variant, seed) of a study file, reusing shared stages (MPI)");
+  st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml")->required()->check(CLI::ExistingFile);
+  st->add_option("--out", study.out, "study folder (manifest study.toml, <variant>/seed<k>.h5)")->required();
+  st->add_flag("--resume", study.resume, "continue a study that was interrupted");
+
   // a mistyped command is named, with the list of commands
   std::string known;
   bool found = false;
@@ -147,16 +183,20 @@ int main(int argc, char** argv) {
     if (*c) return cli::scene(sc);
     if (*d) return cli::demo(demo);
     if (*rp) return cli::report(rep);
+    if (*mv) return cli::movie(mov);
     if (*x) return cli::export_scene(ex);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*keys) return std::printf("%s", io::schema_markdown().c_str()) < 0;
+    if (*sch) return cli::schema(schema_check);
     if (*g) return cli::gd_compare(gdc);
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*gd) return cli::grad_diag(gdg);
     if (*co) return cli::connector_opt(cop);
     if (*v) return mpi::run_main(argc, argv, evo);
     if (*r) return mpi::run_main(argc, argv, run);
+    if (*bfc) return mpi::bench_farm_main(argc, argv, bf);
+    if (*st) return mpi::study_main(argc, argv, study);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());
     return 2;

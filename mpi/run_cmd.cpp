@@ -34,9 +34,15 @@ std::string now_iso() {
 
 // MPI for the lifetime of a command (work happens in an inner scope, so files close before Finalize)
 struct MpiSession {
-  MpiSession(int argc, char** argv) { MPI_Init(&argc, &argv); }
+  // FUNNELED: the task farm computes items in a thread of its own; only the calling thread uses MPI
+  MpiSession(int argc, char** argv) {
+    int provided = 0;
+    MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  }
   ~MpiSession() { MPI_Finalize(); }
 };
+
+}  // namespace
 
 // the sections whose keys decide what a stage computes (beside run.seed, which every stage uses)
 std::vector<std::string> sections_before(const std::string& stage) {
@@ -60,6 +66,8 @@ std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& no
   }
   return diff;
 }
+
+namespace {
 
 // rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
 void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
@@ -94,6 +102,10 @@ void derive_run_file(const std::string& base, const std::string& path, const std
 
 int run_main(int argc, char** argv, const RunArgs& args) {
   MpiSession session(argc, argv);
+  return run_session(args);
+}
+
+int run_session(const RunArgs& args) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);

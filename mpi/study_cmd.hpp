@@ -1,0 +1,40 @@
+// `divcoll study STUDY.toml --out DIR [--resume]`: one run file per (variant, seed) of a study, each made
+// by `divcoll run` (run_session), reusing the earlier stages of an already finished run of the same seed
+// whose keys for those stages agree (as --from does), so variants that differ only in deploy keys do not
+// retrain agents or connectors.
+//
+// The study file (TOML):
+//   [study]
+//   name  = "claims"               run-file folder names and the report title
+//   base  = "../paper.toml"        the run config every run starts from (relative to the study file)
+//   seeds = [1, 2, 3]              run.seed of each replicate run
+//   scale = ["deploy.pairs=100"]   section.key=value overrides applied to every run (before the variant's)
+//   doc   = "..."                  optional: what the study asks
+//   [[variant]]                    one table per variant, in the order they run and are reported
+//   name = "baseline"              [A-Za-z0-9_-]+, unique; its runs are DIR/<name>/seed<k>.h5
+//   set  = []                      section.key=value overrides of this variant
+//   doc  = "..."                   optional: the reading of the paper it stands for
+// Every variant's config is built and validated (unknown keys, bad values, impossible combinations) before
+// any work. Runs go seed by seed, each seed's variants in file order; the base of a run is the earlier
+// variant of the same seed that shares the most leading stages (the earliest on a tie).
+//
+// DIR/study.toml is the manifest: the study file's text, and per run its variant, seed, path, the stage it
+// was computed from and the run it reused (empty: computed from scratch), and its status. `--resume`
+// continues a killed study (the study file must be unchanged) and gives the same run files; without it an
+// existing manifest is refused. Every rank runs the same loop (any rank count, like `divcoll run`).
+#pragma once
+
+#include <string>
+
+namespace divcoll::mpi {
+
+struct StudyArgs {
+  std::string study;  // study file (TOML)
+  std::string out;    // study folder
+  bool resume = false;
+};
+
+// initialises MPI, runs the study, finalises; returns the exit code (2 bad input, 1 failure)
+int study_main(int argc, char** argv, const StudyArgs& args);
+
+}  // namespace divcoll::mpi

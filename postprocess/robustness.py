@@ -1,0 +1,398 @@
+#!/usr/bin/python3
+"""The robustness page of a study folder (`divcoll study STUDY.toml --out DIR`): the paper's claims × the
+study's variants, each cell the claim's effect with a 95% confidence interval over seeds and a verdict, and
+the paper's Fig. 2A per variant with error bars over seeds.
+
+    /usr/bin/python3 postprocess/robustness.py DIR [--out OUT]     (what `divcoll report DIR` runs)
+
+Writes OUT/robustness.md and OUT/figures/fig2a_<variant>.png (OUT defaults to DIR/robustness).
+
+Every claim is the one of claims.py, evaluated by claims.py on each run file (the "held in k/n seeds" count
+uses its verdicts unchanged). The effect of a claim is the margin of the comparison behind claims.py's verdict,
+signed so that a positive effect is the claim's direction (EFFECTS below says which margin, in which unit):
+e.g. "trained collectives travel further than their agents alone" has the effect min over the four kinds
+deployed as trained of (collective − agents alone) on flat, in BL. Per variant the effects of its seeds give
+mean ± the Student t 95% interval over seeds (mean ± t(0.975, n−1)·s/√n, s the sample sd over seeds). Verdict:
+**holds** if the interval lies above 0, **fails** if it lies below 0, **unresolved** if it contains 0, **too
+few seeds** with fewer than 3 seeds (the interval is still shown from 2), not measured if the runs lack the
+stage. "Comparable" claims (no difference expected) are the other way round: holds if the interval contains 0.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tomllib
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import claims as C  # noqa: E402
+from divcoll_post import analysis as A  # noqa: E402
+
+MIN_SEEDS = 3
+LEVEL = 0.95
+
+
+# ---- effects: the signed margin of each claim's comparison (positive = the claim's direction) -----------------
+
+def _as_trained(r):
+    return [t for t in r.types if t.split("@")[0].split("_")[1] == t.split("@")[1]]
+
+
+def e_agents_trained(r):
+    return None if r.fitness is None else float(r.fitness.mean()) - 3.0
+
+
+def e_agents_drop(r):
+    if not r.has["deploy"]:
+        return None
+    alone = 1 - r.novel_mean(r.alone) / r.alone[r.flat]
+    return alone - max(1 - r.novel_mean(m) / m[r.flat] for m in r.coll.values())
+
+
+def e_untrained_drop(r):
+    if not r.curves or r.fitness is None:
+        return None
+    return 0.5 * float(r.fitness.mean()) - max(c[0] for c in r.curves.values())
+
+
+def e_trained_beat_alone(r):
+    if not r.has["deploy"]:
+        return None
+    return min(r.coll[t][r.flat] for t in _as_trained(r)) - r.alone[r.flat]
+
+
+def e_weak_diverse_best_flat(r):
+    if not r.has["deploy"]:
+        return None
+    others = [t for t in _as_trained(r) if t != "weak_diverse@diverse"]
+    if not others:
+        return None
+    return r.coll["weak_diverse@diverse"][r.flat] - max(r.coll[t][r.flat] for t in others)
+
+
+def e_all_drop_novel(r):
+    if not r.has["deploy"]:
+        return None
+    return min(r.coll[t][r.flat] - r.novel_mean(r.coll[t]) for t in r.types)
+
+
+def e_weak_diverse_best_novel(r):
+    if not r.has["deploy"]:
+        return None
+    others = [t for t in r.types if t != "weak_diverse@diverse"]
+    return r.novel_mean(r.coll["weak_diverse@diverse"]) - max(r.novel_mean(r.coll[t]) for t in others)
+
+
+def e_transplant(r):
+    if not r.has["deploy"]:
+        return None
+    dd, du = r.coll["weak_diverse@diverse"][r.flat], r.coll["weak_diverse@uniform"][r.flat]
+    uu, ud = r.coll["weak_uniform@uniform"][r.flat], r.coll["weak_uniform@diverse"][r.flat]
+    return min(0.25 * abs(dd) - (dd - du), uu - ud)
+
+
+def e_weak_diverse_most_envs(r):
+    if not r.has["deploy"]:
+        return None
+    weak = [t for t in r.types if t.startswith("weak")]
+    wins = sum(1 for e in r.novel if max(weak, key=lambda t: r.coll[t][e]) == "weak_diverse@diverse")
+    beats = sum(1 for e in r.novel if r.coll["weak_diverse@diverse"][e] > r.alone[e])
+    return (min(wins, beats) - len(r.novel) / 2) / len(r.novel)
+
+
+def e_specialists(r):
+    if not (r.has["specialists"] and r.has["deploy"]):
+        return None
+    gen = np.array([r.coll["weak_diverse@diverse"][r.envs.index(e)] for e in r.spec_envs])
+    return float(np.max(gen - r.spec_best))
+
+
+def e_scaling(r):
+    if not r.has["scaling"]:
+        return None
+    adv = r.scale[:, 1] - r.scale[:, 0]
+    return float(min(np.min(np.diff(adv)) if len(adv) > 1 else np.inf, adv[-1]))
+
+
+def e_graded(r):
+    if not (r.has["graded"] and r.has["deploy"]):
+        return None
+    rows = [(r.novel_mean(r.alone), r.novel_mean(r.coll["weak_diverse@diverse"]))] + list(r.graded.values())
+    g = [p - a for a, p in rows]
+    return min(g[0] - g[1], g[1] - g[2])
+
+
+def e_diverse_disrupted_more(r):
+    adv = C._adversity(r)
+    if adv is None:
+        return None
+    return float(np.nanmean(adv.all_replicate_means(A.DIVERSE)) - np.nanmean(adv.all_replicate_means(A.UNIFORM)))
+
+
+def e_worse_altered_more(r):
+    adv = C._adversity(r)
+    return None if adv is None else min(adv.mean(t, A.WORSE) - adv.mean(t, A.BETTER) for t in A.TYPES)
+
+
+def e_diverse_change_worse_more(r):
+    adv = C._adversity(r)
+    return None if adv is None else adv.mean(A.DIVERSE, A.WORSE) - adv.mean(A.UNIFORM, A.WORSE)
+
+
+def e_better_comparable(r):
+    adv = C._adversity(r)
+    return None if adv is None else adv.mean(A.DIVERSE, A.BETTER) - adv.mean(A.UNIFORM, A.BETTER)
+
+
+def _majority(r, count, first, second):
+    """(environments where the familiarity table's count `count` of type `first` exceeds `second`'s − half of them)
+    / environments: positive when it is most environments"""
+    fam = C._familiarity(r)
+    if fam is None:
+        return None
+    tab, n = fam.best_table(), len(fam.envs)
+    return (sum(1 for i in range(n) if tab[i, count, first] > tab[i, count, second]) - n / 2) / n
+
+
+def e_more_familiar(r):
+    return _majority(r, 0, 0, 1)  # states in shared cells, diverse-trained above uniform-trained
+
+
+def e_uniform_more_novel_states(r):
+    return _majority(r, 2, 1, 0)  # novel-only states, uniform-trained above diverse-trained
+
+
+def e_wind_unfamiliar(r):
+    fam = C._familiarity(r)
+    if fam is None or A.WIND not in fam.envs:
+        return None
+    t = fam.best_table()[fam.envs.index(A.WIND)]
+    return min(t[0, 0] - t[0, 1], (t[1, 1] + t[2, 1]) - (t[1, 0] + t[2, 0]))
+
+
+# claims.py's claim function -> (effect, what the effect is, unit, "equal" for a claim of no difference)
+EFFECTS = {
+    C.c_agents_trained: (e_agents_trained, "final population's mean fitness − 3", "BL", False),
+    C.c_agents_drop: (e_agents_drop, "relative drop flat → novel of agents alone − the largest of any collective type", "", False),
+    C.c_untrained_drop: (e_untrained_drop, "half the agents' fitness − the best untrained batch mean", "BL", False),
+    C.c_trained_beat_alone: (e_trained_beat_alone, "min over kinds deployed as trained of (collective − agents alone) on flat", "BL", False),
+    C.c_weak_diverse_best_flat: (e_weak_diverse_best_flat, "weak diverse@diverse − the best other kind as trained, flat", "BL", False),
+    C.c_all_drop_novel: (e_all_drop_novel, "min over types of (flat − novel mean)", "BL", False),
+    C.c_weak_diverse_best_novel: (e_weak_diverse_best_novel, "weak diverse@diverse − the best other type, novel mean", "BL", False),
+    C.c_transplant: (e_transplant, "min(¼·abs(dd) − (dd − du), uu − ud) on flat, dd = diverse-trained on diverse pairs, du = on clones, uu, ud the same for uniform-trained", "BL", False),
+    C.c_weak_diverse_most_envs: (e_weak_diverse_most_envs, "(min(environments best of weak, environments above alone) − half) / environments", "", False),
+    C.c_specialists: (e_specialists, "max over environments of (generalist − best specialist)", "BL", False),
+    C.c_scaling: (e_scaling, "min(growth of diverse − uniform from size to size, its value at the largest size)", "BL", False),
+    C.c_graded: (e_graded, "min of the steps in (pairs − alone) from more to fewer sources of diversity", "BL", False),
+    C.c_diverse_disrupted_more: (e_diverse_disrupted_more, "DTW per step, diverse-trained − uniform-trained, all agents", "u", False),
+    C.c_worse_altered_more: (e_worse_altered_more, "min over the two types of (worse − better agent's DTW per step)", "u", False),
+    C.c_diverse_change_worse_more: (e_diverse_change_worse_more, "worse agents' DTW per step, diverse-trained − uniform-trained", "u", False),
+    C.c_better_comparable: (e_better_comparable, "better agents' DTW per step, diverse-trained − uniform-trained (claim: ≈ 0)", "u", True),
+    C.c_more_familiar: (e_more_familiar, "(environments where diverse-trained has more shared-cell states − half) / environments", "", False),
+    C.c_uniform_more_novel_states: (e_uniform_more_novel_states, "(environments where uniform-trained has more novel-only states − half) / environments", "", False),
+    C.c_wind_unfamiliar: (e_wind_unfamiliar, "min(shared states diverse − uniform, one-sided states uniform − diverse), wind", "states", False),
+}
+
+
+def t_interval(values, level=LEVEL):
+    """(mean, lo, hi, n) of the finite values: Student t interval over seeds; lo = hi = nan below 2 values"""
+    from scipy import stats
+    v = np.array([x for x in values if x is not None and np.isfinite(x)], dtype=float)
+    n = v.size
+    if n == 0:
+        return float("nan"), float("nan"), float("nan"), 0
+    m = float(v.mean())
+    if n < 2:
+        return m, float("nan"), float("nan"), n
+    h = float(stats.t.ppf(0.5 + level / 2, n - 1) * v.std(ddof=1) / np.sqrt(n))
+    return m, m - h, m + h, n
+
+
+def verdict(mean, lo, hi, n, equal=False):
+    if n == 0:
+        return "not measured"
+    if n < MIN_SEEDS:
+        return "too few seeds"
+    if equal:
+        return "holds" if lo <= 0 <= hi else "fails"
+    return "holds" if lo > 0 else "fails" if hi < 0 else "unresolved"
+
+
+def num(x):
+    return "—" if x is None or not np.isfinite(x) else f"{x:+.3g}"
+
+
+# ---- the study folder -----------------------------------------------------------------------------------------
+
+def load_manifest(folder):
+    path = os.path.join(folder, "study.toml")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{folder} is not a study folder (no study.toml; make one with `divcoll study`)")
+    with open(path, "rb") as fh:
+        m = tomllib.load(fh)
+    if m.get("format") != "divcoll-study":
+        raise ValueError(f"{path} is not a divcoll study manifest")
+    return m
+
+
+def evaluate(folder, manifest):
+    """{variant: {"seeds": [...], "runs": [claims.Run], "cells": [(claim text, mean, lo, hi, n, verdict, held, n_eval)]}}"""
+    out = {}
+    for v in manifest["variant"]:
+        runs, seeds = [], []
+        for r in manifest["run"]:
+            if r["variant"] != v["name"] or r["status"] != "complete":
+                continue
+            path = os.path.join(folder, r["path"])
+            if os.path.exists(path):
+                runs.append(C.Run(path))
+                seeds.append(r["seed"])
+        cells = []
+        for text, fn in C.CLAIMS:
+            eff, _, _, equal = EFFECTS[fn]
+            values, held, measured = [], 0, 0
+            for run in runs:
+                try:
+                    _, vd = fn(run)
+                    e = eff(run)
+                except (KeyError, ValueError, IndexError, ZeroDivisionError):
+                    vd, e = "not measured", None
+                if vd != "not measured":
+                    measured += 1
+                    held += vd == "held"
+                values.append(e)
+            m, lo, hi, n = t_interval(values)
+            cells.append((text, m, lo, hi, n, verdict(m, lo, hi, n, equal), held, measured))
+        out[v["name"]] = {"seeds": seeds, "runs": runs, "cells": cells}
+    return out
+
+
+# ---- Fig. 2A per variant ----------------------------------------------------------------------------------------
+
+def fig2a(variant, runs, seeds, path):
+    """flat and novel travel of agents alone and every collective type: mean over seeds, t 95% interval over
+    seeds as the error bar, each seed a dot"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    runs = [r for r in runs if r.has["deploy"]]
+    if not runs:
+        return False
+    types = runs[0].types
+    labels = ["agents alone"] + types
+    fig, axes = plt.subplots(1, 2, figsize=(max(6, 0.9 * len(labels) + 2), 3.6), sharey=True)
+    for ax, where in zip(axes, ["flat", "novel"]):
+        for k, lab in enumerate(labels):
+            vals = []
+            for r in runs:
+                arr = r.alone if k == 0 else r.coll.get(lab)
+                if arr is None:
+                    continue
+                vals.append(arr[r.flat] if where == "flat" else r.novel_mean(arr))
+            m, lo, hi, n = t_interval(vals)
+            kind = lab.split("@")[0]
+            color = "#404040" if k == 0 else ("#2166ac" if "diverse" in kind else "#e66101")
+            hatch = "//" if lab.endswith("@uniform") else None
+            ax.bar(k, m if np.isfinite(m) else 0, color=color, alpha=0.35 if "strong" in kind else 0.8, hatch=hatch,
+                   edgecolor="black", linewidth=0.5)
+            if np.isfinite(lo):
+                ax.errorbar(k, m, yerr=[[m - lo], [hi - m]], color="black", capsize=3, linewidth=1)
+            ax.scatter(np.full(len(vals), k) + np.linspace(-0.15, 0.15, len(vals)), vals, s=8, color="black", zorder=3)
+        ax.set_xticks(range(len(labels)))
+        ax.set_xticklabels([lab.replace("_", "\n").replace("@", "\non ") for lab in labels], fontsize=6)
+        ax.set_title(f"{where}" + (" (mean of environment means)" if where == "novel" else ""), fontsize=8)
+        ax.axhline(0, color="black", linewidth=0.5)
+    axes[0].set_ylabel("travel (BL)")
+    fig.suptitle(f"Fig. 2A, variant {variant}: mean over seeds {', '.join(map(str, seeds))} "
+                 f"(bars: t 95% interval over seeds; dots: seeds)", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return True
+
+
+# ---- the page ---------------------------------------------------------------------------------------------------
+
+def write_page(folder, out):
+    man = load_manifest(folder)
+    res = evaluate(folder, man)
+    fig_dir = os.path.join(out, "figures")
+    os.makedirs(fig_dir, exist_ok=True)
+    variants = [v["name"] for v in man["variant"]]
+    done = sum(1 for r in man["run"] if r["status"] == "complete")
+    lines = [f"# Robustness of the paper's claims: study {man['name']}", ""]
+    if man.get("doc"):
+        lines += [man["doc"], ""]
+    lines += [f"Study folder `{os.path.abspath(folder)}`; base config `{man['base']}`; seeds "
+              f"{', '.join(map(str, man['seeds']))}; {done} of {len(man['run'])} runs complete. Every run: "
+              + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ".", "",
+              "| variant | overrides | reading | runs (seeds) | reuses |", "|---|---|---|---|---|"]
+    for v in man["variant"]:
+        rs = [r for r in man["run"] if r["variant"] == v["name"]]
+        reuse = sorted({f"{r['reuses'].split('/')[0]} (before {r['from']})" for r in rs if r["reuses"]})
+        lines.append(f"| {v['name']} | {', '.join(f'`{s}`' for s in v['set']) or '—'} | {v.get('doc', '')} | "
+                     f"{len(res[v['name']]['seeds'])} ({', '.join(map(str, res[v['name']]['seeds']))}) | "
+                     f"{', '.join(reuse) or '—'} |")
+    lines += ["", "## Claims × variants", "",
+              "Each cell: the claim's effect (positive = the paper's direction; definitions below), mean over seeds "
+              f"with its Student t {LEVEL:.0%} interval over seeds, then how many seeds claims.py's own test held "
+              f"in, and the verdict (holds: interval above 0; fails: below 0; unresolved: contains 0; too few seeds: "
+              f"fewer than {MIN_SEEDS}).", "",
+              "| claim | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
+    counts = {v: {} for v in variants}
+    for ci, (text, fn) in enumerate(C.CLAIMS):
+        unit = EFFECTS[fn][2]
+        row = [text]
+        for v in variants:
+            _, m, lo, hi, n, vd, held, meas = res[v]["cells"][ci]
+            counts[v][vd] = counts[v].get(vd, 0) + 1
+            if vd == "not measured":
+                row.append("not measured")
+                continue
+            ci_txt = f" [{num(lo)}, {num(hi)}]" if np.isfinite(lo) else ""
+            row.append(f"{num(m)}{ci_txt} {unit} · held {held}/{meas} · **{vd}**")
+        lines.append("| " + " | ".join(row) + " |")
+    lines += ["", "| verdicts | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
+    for vd in ["holds", "fails", "unresolved", "too few seeds", "not measured"]:
+        lines.append(f"| {vd} | " + " | ".join(str(counts[v].get(vd, 0)) for v in variants) + " |")
+    lines += ["", "## Effects", "", "| claim | effect (positive = the claim's direction) | unit |", "|---|---|---|"]
+    for text, fn in C.CLAIMS:
+        _, what, unit, equal = EFFECTS[fn]
+        lines.append(f"| {text} | {what}{' (holds if the interval contains 0)' if equal else ''} | {unit or '—'} |")
+    lines += ["", "## Fig. 2A per variant", ""]
+    for v in variants:
+        png = os.path.join(fig_dir, f"fig2a_{v}.png")
+        if fig2a(v, res[v]["runs"], res[v]["seeds"], png):
+            rel = os.path.relpath(png, out)
+            lines += [f"### {v}", "", f"![{rel}]({rel})", ""]
+        else:
+            lines += [f"### {v}", "", "No complete deploy stage in this variant's runs.", ""]
+    path = os.path.join(out, "robustness.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path, res
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("study", help="study folder (divcoll study --out DIR)")
+    ap.add_argument("--out", help="output folder (default DIR/robustness)")
+    ap.add_argument("--divcoll", help="accepted for `divcoll report`; unused")
+    a = ap.parse_args(argv)
+    out = a.out or os.path.join(a.study, "robustness")
+    try:
+        path, res = write_page(a.study, out)
+    except (OSError, ValueError, tomllib.TOMLDecodeError) as e:
+        print(f"robustness: {e}", file=sys.stderr)
+        return 2
+    n = sum(len(r["cells"]) for r in res.values())
+    print(f"robustness: wrote {path} ({len(C.CLAIMS)} claims × {len(res)} variants = {n} cells)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

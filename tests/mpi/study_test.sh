@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# `divcoll study` on configs/studies/tiny.toml (2 variants x 2 seeds at the tiny preset, the second variant
+# differs only in a deploy key): the runs that reuse earlier stages hold them bit for bit and did not
+# recompute them, and equal a run made from scratch; a study killed (SIGKILL) while it runs and resumed with
+# another rank count gives the same run files; the robustness page lists every claim x variant cell; a bad
+# study file is refused before any work. Usage: study_test.sh DIVCOLL SOURCE_DIR
+set -euo pipefail
+D=$1 SRC=$2
+source "$SRC/jobs/mpi-env.sh"
+STUDY=$SRC/configs/studies/tiny.toml
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+fail() { echo "FAILED: $*"; exit 1; }
+
+echo "== the study on 2 ranks"
+mpirun -np 2 "$D" study "$STUDY" --out "$W/a" > "$W/a.log" 2>&1 || { cat "$W/a.log"; fail "study exited non-zero"; }
+grep -E "^study: run [0-9]+/4 " "$W/a.log"
+[ "$(grep -c "status = 'complete'" "$W/a/study.toml")" = 4 ] || fail "the manifest does not list 4 complete runs"
+for s in 1 2; do
+  B=$W/a/baseline/seed$s.h5 V=$W/a/long_deploy/seed$s.h5
+  [ -f "$B" ] && [ -f "$V" ] || fail "missing run files for seed $s"
+  # reuse: the variant's file was derived from the baseline's, before deploy ...
+  h5dump -a /derived_from "$V" | grep -q "baseline/seed$s.h5 (stages before deploy)" || fail "long_deploy seed $s was not derived from baseline seed $s"
+  # ... its agents and connectors datasets are the baseline's bit for bit ...
+  for g in /agents /connectors; do
+    h5diff "$B" "$V" "$g" "$g" > /dev/null || fail "$g of long_deploy seed $s differs from baseline seed $s"
+  done
+  # ... and differ where they must (its own deploy stage, longer episodes)
+  if h5diff -q "$B" "$V" /deploy/agents/travel_bl /deploy/agents/travel_bl > /dev/null 2>&1; then
+    fail "long_deploy seed $s has the baseline's deploy travel: its deploy stage was not run"
+  fi
+done
+# not recomputed: the run that made long_deploy seed 2 found agents and connectors complete and ran neither
+awk '/run 4\/4 long_deploy seed 2/{on=1} on' "$W/a.log" > "$W/run4.log"
+grep -q "stage agents: complete in the run file" "$W/run4.log" || fail "run 4 did not find its agents stage in the file"
+grep -q "stage connectors: complete in the run file" "$W/run4.log" || fail "run 4 did not find its connectors stage in the file"
+if grep -qE "^(agents|connectors): " "$W/run4.log"; then fail "run 4 recomputed agents or connectors"; fi
+# and a reused run equals the same config run from scratch
+"$D" run "$SRC/configs/tiny.toml" 'run.stages=["agents","connectors","deploy","analysis"]' \
+  'connectors.kinds=["weak_uniform","weak_diverse"]' deploy.episode_steps=300 run.seed=2 --out "$W/scratch.h5" > /dev/null
+"$D" compare "$W/scratch.h5" "$W/a/long_deploy/seed2.h5" || fail "the reused run differs from a run from scratch"
+echo "reuse: ok"
+
+echo "== killed and resumed"
+for trial in 1 2; do
+  rm -rf "$W/k"
+  # trial 1 is killed while run 2 (derived from run 1) computes, trial 2 while run 3 (from scratch) does
+  at=$((trial + 1))
+  "$D" study "$STUDY" --out "$W/k" > "$W/k.log" 2>&1 &
+  job=$!
+  for _ in $(seq 1 1200); do
+    grep -q "^study: run $at/4" "$W/k.log" 2>/dev/null && break
+    kill -0 "$job" 2>/dev/null || break
+    sleep 0.05
+  done
+  sleep 0.3
+  kill -9 "$job" 2>/dev/null || true
+  wait "$job" 2>/dev/null || true
+  if [ "$(grep -c "status = 'complete'" "$W/k/study.toml" 2>/dev/null || true)" = 4 ]; then
+    fail "trial $trial: the kill did not interrupt the study"
+  fi
+  echo "trial $trial: killed during run $at"
+  # refused without --resume, continued with it (another rank count)
+  if "$D" study "$STUDY" --out "$W/k" > "$W/k2.log" 2>&1; then fail "an existing study was continued without --resume"; fi
+  grep -q "pass --resume" "$W/k2.log" || fail "the refusal does not say --resume"
+  mpirun -np 2 "$D" study "$STUDY" --out "$W/k" --resume > "$W/k2.log" 2>&1 || { cat "$W/k2.log"; fail "resume failed"; }
+  for f in baseline/seed1.h5 baseline/seed2.h5 long_deploy/seed1.h5 long_deploy/seed2.h5; do
+    "$D" compare "$W/a/$f" "$W/k/$f" > /dev/null || fail "trial $trial: $f differs after kill and resume"
+  done
+  echo "trial $trial: resumed, 4 run files identical"
+done
+
+echo "== the robustness page"
+"$D" report "$W/a" --out "$W/page" > "$W/page.log" 2>&1 || { cat "$W/page.log"; fail "divcoll report DIR failed"; }
+/usr/bin/python3 - "$SRC/postprocess" "$W/page/robustness.md" <<'EOF' || fail "the robustness page lacks cells"
+import sys
+sys.path.insert(0, sys.argv[1])
+import claims
+rows = {}
+for line in open(sys.argv[2]).read().split("## Claims × variants")[1].split("## Effects")[0].splitlines():
+    cells = [c.strip() for c in line.strip().strip("|").split("|")]
+    if len(cells) == 3 and cells[0] in [t for t, _ in claims.CLAIMS]:
+        rows[cells[0]] = cells[1:]
+missing = [t for t, _ in claims.CLAIMS if t not in rows]
+assert not missing, f"claims without a row: {missing}"
+for t, cells in rows.items():
+    for c in cells:
+        # two seeds: every measured cell is "too few seeds", never a verdict
+        assert c == "not measured" or c.endswith("**too few seeds**"), (t, c)
+measured = sum(c != "not measured" for cs in rows.values() for c in cs)
+assert measured >= 2 * 12, f"only {measured} measured cells"
+print(f"{len(rows)} claims x 2 variants, {measured} cells measured")
+EOF
+for v in baseline long_deploy; do [ -s "$W/page/figures/fig2a_$v.png" ] || fail "no Fig. 2A for $v"; done
+
+echo "== bad study files are refused before any work"
+sed 's/set = \["deploy.episode_steps=300"\]/set = ["deploy.episode_stepz=300"]/' "$STUDY" > "$W/bad1.toml"
+sed 's/set = \["deploy.episode_steps=300"\]/set = ["deploy.episode_steps=0"]/' "$STUDY" > "$W/bad2.toml"
+sed 's/^seeds = \[1, 2\]/seeds = [1, 2]\nrepeats = 3/' "$STUDY" > "$W/bad3.toml"
+for b in 1 2 3; do
+  sed -i "s|base = \"../tiny.toml\"|base = \"$SRC/configs/tiny.toml\"|" "$W/bad$b.toml"
+  set +e; "$D" study "$W/bad$b.toml" --out "$W/bad$b" > "$W/bad.log" 2>&1; rc=$?; set -e
+  [ "$rc" = 2 ] || { cat "$W/bad.log"; fail "bad study $b: exit $rc, not 2"; }
+  [ ! -e "$W/bad$b" ] || fail "bad study $b wrote $W/bad$b"
+  head -1 "$W/bad.log"
+  [ "$b" = 3 ] || grep -q "variant long_deploy" "$W/bad.log" || fail "bad study $b: the message does not name the variant"
+done
+echo "study: passed"
