@@ -20,6 +20,8 @@ declare -A opt=(
   [adam_window100]="connectors.bptt_window=100"
   [adam_smooth2]="connectors.grad_samples=2 connectors.grad_sigma=0.01"
   [es8]="connectors.optimizer=es connectors.es_popsize=8 connectors.es_sigma=0.01"
+  [adam_window100_cosine]="connectors.bptt_window=100 connectors.lr_schedule=cosine connectors.lr_final=0.1"
+  [passive]="connectors.iterations=0 connectors.init_out_gain=0"
 )
 declare -A kind=(
   [u300]="connectors.kinds=weak_uniform connectors.weak_stiffness=300"
@@ -28,8 +30,10 @@ declare -A kind=(
 # most telling first: the plain baseline and the black-box control, then the gradient remedies (RUNS="kind:opt
 # ..." runs a subset)
 default_runs="u300:adam d5000:adam u300:es8 d5000:es8 u300:adam_window100 d5000:adam_window100 u300:adam_cosine
-              d5000:adam_cosine u300:adam_smooth2 d5000:adam_smooth2"
-read -r -a runs <<< "$(echo ${RUNS:-$default_runs})"
+              d5000:adam_cosine u300:adam_smooth2 d5000:adam_smooth2 u300:passive d5000:passive
+              u300:adam_window100_cosine d5000:adam_window100_cosine"
+# shellcheck disable=SC2206
+runs=(${RUNS:-$default_runs})
 i=0
 for run in "${runs[@]}"; do
   k=${run%%:*} o=${run##*:}
