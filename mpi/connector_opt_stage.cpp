@@ -138,6 +138,7 @@ std::vector<std::vector<double>> train_connectors_extended(MPI_Comm comm, const 
     sim::RunOptions ro;
     ro.steps = spec.episode_steps;
     ro.grad = t.grad != 0;
+    ro.agent_param_grad = false;  // the agents stay frozen
     ro.grad_window = os.bptt_window;
     const collective::PairOutcome o = collective::run_pair(sim, agents[t.a], agents[t.b], w, s.stiffness, s.env, ro, nullptr);
     return pack(ProbeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad});

@@ -121,6 +121,7 @@ int grad_diag(const GradDiagArgs& a) {
     sim::RunOptions opt;
     opt.steps = T;
     opt.grad = true;
+    opt.agent_param_grad = false;
     collective::ProbeSum all, h1, h2;
     std::vector<double> pair_norms;
     for (size_t p = 0; p < batch.size(); ++p) {

@@ -259,6 +259,7 @@ ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
   sim::RunOptions opt;
   opt.steps = steps;
   opt.grad = grad;
+  opt.agent_param_grad = false;  // the agents stay frozen
   opt.grad_window = bptt_window;
   ProbeSum sum;
   for (const auto& [a, b] : pairs) sum.add(run_pair(sim, agents[a], agents[b], weights, stiffness, "flat", opt, nullptr));

@@ -37,6 +37,8 @@ struct RunOptions {
   int grad_window = 0;           // truncated backpropagation: > 0 cuts the adjoint of the state every this many
                                  // steps (the gradient of travel's per-window displacements, each window's start
                                  // state held fixed); 0 = the full gradient
+  bool agent_param_grad = true;  // with grad: also w.r.t. the agents' controller weights (a third of the
+                                 // MLP backward; connector training leaves them frozen and sets false)
   bool record = false;           // keep x, v, touch at every step for output
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
@@ -62,7 +64,7 @@ struct RunResult {
   } contacts;
 
   // with grad (zero when status is not ok)
-  std::vector<double> grad_agent_params;      // (A x P_a)
+  std::vector<double> grad_agent_params;      // (A x P_a), empty unless agent_param_grad
   std::vector<double> grad_connector_params;  // (P_c), empty when C = 0
   std::vector<double> grad_x0;                // (N x 2)
   std::vector<double> grad_rest_length;       // (S)
