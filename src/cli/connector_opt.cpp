@@ -16,7 +16,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "morph/body.hpp"
-#include "mpi/agents_stage.hpp"
+#include "io/run_read.hpp"
 
 namespace divcoll::cli {
 

@@ -16,7 +16,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "morph/body.hpp"
-#include "mpi/agents_stage.hpp"
+#include "io/run_read.hpp"
 
 namespace divcoll::cli {
 namespace {
@@ -61,7 +61,7 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("agents/final"), run << " has no final agent population (run the agents stage)");
   RunAgents ra{io::apply_overrides(io::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}};
-  for (const auto& x : mpi::read_final_population(f)) ra.agents.push_back(x.agent);
+  for (const auto& x : io::read_final_population(f)) ra.agents.push_back(x.agent);
   for (auto& ag : ra.agents) ag.anchors = collective::compute_anchors(ag);
   return ra;
 }

@@ -11,10 +11,11 @@
 #include "io/config.hpp"
 #include "io/environments.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
+#include "io/run_read.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "morph/body.hpp"
-#include "mpi/protocol.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll::cli {
@@ -28,6 +29,20 @@ void check_output_path(const std::string& path, bool force) {
   DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "output folder " << parent.string() << " does not exist");
 }
 
+// the trajectory file's content for a simulated scene (without gradients)
+io::Trajectory trajectory_of(const sim::Scene& scene, const sim::RunResult& r, int steps) {
+  io::Trajectory t;
+  t.steps = steps;
+  t.n_masses = scene.n_masses();
+  t.n_agents = scene.n_agents();
+  t.x = r.x;
+  t.v = r.v;
+  t.touch = r.touch;
+  t.travel = r.travel;
+  t.status = sim::status_name(r.status);
+  return t;
+}
+
 int simulate(const SimulateArgs& a) {
   check_output_path(a.out, a.force);
   const sim::Scene scene = io::read_scene(a.scene);
@@ -37,15 +52,7 @@ int simulate(const SimulateArgs& a) {
   opt.record = true;
   const sim::RunResult r = sim::simulate(scene, opt);
 
-  io::Trajectory t;
-  t.steps = a.steps;
-  t.n_masses = scene.n_masses();
-  t.n_agents = scene.n_agents();
-  t.x = r.x;
-  t.v = r.v;
-  t.touch = r.touch;
-  t.travel = r.travel;
-  t.status = sim::status_name(r.status);
+  io::Trajectory t = trajectory_of(scene, r, a.steps);
   t.has_grad = a.grad;
   if (a.grad) {
     t.grad_agent_params = r.grad_agent_params;
@@ -61,20 +68,13 @@ int simulate(const SimulateArgs& a) {
   return r.status == sim::Status::ok ? 0 : 3;
 }
 
-namespace {
-double stiffness_of(const std::string& kind) {
-  if (kind == "weak") return collective::kWeakConnector;
-  if (kind == "strong") return collective::kStrongConnector;
-  throw InputError(msg() << "--connector must be weak or strong (got '" << kind << "')");
-}
-}  // namespace
-
 int scene(const SceneArgs& a) {
   check_output_path(a.out, a.force);
   io::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const double k = stiffness_of(a.connector);
+  const double k = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config),
+                                         a.connector);
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
@@ -103,20 +103,6 @@ int scene(const SceneArgs& a) {
 }
 
 namespace {
-// a trajectory file of a simulated scene
-void write_traj(const std::string& path, const sim::Scene& scene, const sim::RunResult& r, int steps) {
-  io::Trajectory t;
-  t.steps = steps;
-  t.n_masses = scene.n_masses();
-  t.n_agents = scene.n_agents();
-  t.x = r.x;
-  t.v = r.v;
-  t.touch = r.touch;
-  t.travel = r.travel;
-  t.status = sim::status_name(r.status);
-  io::write_trajectory(path, t, /*overwrite=*/true);
-}
-
 // the pair of the run's weak diverse-trained connector (replicate 0) whose travel on flat is the median of
 // the ok pairs: a typical pair, not the best one
 int median_pair(const std::string& run, int* n_ok, double* median_bl) {
@@ -126,8 +112,8 @@ int median_pair(const std::string& run, int* n_ok, double* median_bl) {
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("deploy/collectives/travel_bl") && f.group("deploy").read_string("status") == "complete",
                        run << " has no complete deploy stage (the demo needs trained agents and connectors)");
-  const auto envs = mpi::split(f.group("deploy").read_string("environments"));
-  const auto types = mpi::split(f.group("deploy").read_string("types"));
+  const auto envs = io::split(f.group("deploy").read_string("environments"));
+  const auto types = io::split(f.group("deploy").read_string("types"));
   int e = -1, t = -1;
   for (size_t i = 0; i < envs.size(); ++i)
     if (envs[i] == "flat") e = static_cast<int>(i);
@@ -173,26 +159,29 @@ int demo(const DemoArgs& a) {
       DIVCOLL_THROW_UNLESS(rc == 0, "divcoll export failed for " << env);
       const io::h5::File f = io::h5::File::open(a.run);
       const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
-      const auto envs = mpi::split(f.group("deploy").read_string("environments"));
-      const auto types = mpi::split(f.group("deploy").read_string("types"));
+      const auto envs = io::split(f.group("deploy").read_string("environments"));
+      const auto types = io::split(f.group("deploy").read_string("types"));
       const int e = static_cast<int>(std::find(envs.begin(), envs.end(), env) - envs.begin());
       const int t = static_cast<int>(std::find(types.begin(), types.end(), "weak_diverse@diverse") - types.begin());
       DIVCOLL_THROW_UNLESS(e < static_cast<int>(envs.size()), a.run << " has no deployment in " << env);
       io::h5::Dims d;
       const std::vector<double> bl = f.read<double>("deploy/collectives/travel_bl", &d);
-      const double stored = bl[((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q];
+      const size_t at = ((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q;
+      const double stored = bl[at];
+      const double stored_u = f.read<double>("deploy/collectives/travel_u")[at];
       const sim::Scene s = io::read_scene(ex.out);
       sim::RunOptions opt;
       opt.steps = cfg.deploy.episode_steps;
       opt.record = true;
       const sim::RunResult r = sim::simulate(s, opt);
       const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
-      write_traj(traj, s, r, opt.steps);
+      io::write_trajectory(traj, trajectory_of(s, r, opt.steps), /*overwrite=*/true);
       const double got = r.travel / sim::mean_body_length(s);
       char row[512];
       std::snprintf(row, sizeof row, "%-12s %10.4f %10.4f %10s %16.4f  %s%s\n", env.c_str(), r.travel, got,
                     sim::status_name(r.status), stored, traj.c_str(),
-                    (std::isnan(stored) && std::isnan(got)) || stored == got ? "" : "  (differs from the run file!)");
+                    (std::isnan(stored_u) && std::isnan(r.travel)) || stored_u == r.travel ? ""
+                                                                                : "  (differs from the run file!)");
       rows.push_back(row);
       episodes.emplace_back(ex.out, traj);
     }
@@ -209,7 +198,7 @@ int demo(const DemoArgs& a) {
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, collective::kWeakConnector, env);
+      const sim::Scene s = collective::pair_scene(P, A, conn, io::strength_stiffness(io::default_config(), "weak"), env);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
       sim::RunOptions opt;
@@ -217,7 +206,7 @@ int demo(const DemoArgs& a) {
       opt.record = true;
       const sim::RunResult r = sim::simulate(s, opt);
       const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
-      write_traj(traj, s, r, opt.steps);
+      io::write_trajectory(traj, trajectory_of(s, r, opt.steps), /*overwrite=*/true);
       std::printf("%-12s %10.4f %10.4f %10s  %s\n", env.c_str(), r.travel, r.travel / sim::mean_body_length(s),
                   sim::status_name(r.status), path.c_str());
       episodes.emplace_back(path, traj);
