@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 #include "common/check.hpp"
 #include "morph/body.hpp"
 #include "mpi/connectors_stage.hpp"

@@ -7,7 +7,7 @@
 #include <limits>
 #include <numeric>
 
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "morph/body.hpp"

@@ -10,12 +10,13 @@
 #include <sstream>
 
 #include "cli/commands.hpp"
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "morph/body.hpp"
+#include "io/pipeline.hpp"
 #include "io/run_read.hpp"
 
 namespace divcoll::cli {
@@ -51,8 +52,8 @@ int connector_opt(const ConnectorOptArgs& a) {
   const int R = C.replicates;
   for (size_t k = 0; k < C.kinds.size(); ++k) {
     const std::string& kind = C.kinds[k];
-    const bool diverse = collective::kind_is_diverse(kind);
-    const double stiff = collective::kind_is_weak(kind) ? C.weak_stiffness : C.strong_stiffness;
+    const bool diverse = io::connector_kind(kind).diverse;
+    const double stiff = io::stiffness(cfg, kind);
     std::vector<std::pair<int, int>> eval;
     if (diverse) {
       Rng rng = make_rng(cfg.run.seed, 3000, 0);  // the deployment's diverse pairs

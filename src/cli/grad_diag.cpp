@@ -10,12 +10,13 @@
 #include <sstream>
 
 #include "cli/commands.hpp"
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "morph/body.hpp"
+#include "io/pipeline.hpp"
 #include "io/run_read.hpp"
 
 namespace divcoll::cli {
@@ -70,7 +71,7 @@ int grad_diag(const GradDiagArgs& a) {
   const RunAgents ra = load_run_agents(a.run, a.overrides);
   const io::RunConfig& cfg = ra.cfg;
   const std::vector<collective::Agent>& agents = ra.agents;
-  const auto& kinds = collective::connector_kinds();
+  const auto kinds = io::connector_kind_names();
   int kind = -1;
   for (size_t k = 0; k < kinds.size(); ++k)
     if (kinds[k] == a.kind) kind = static_cast<int>(k);
@@ -82,8 +83,8 @@ int grad_diag(const GradDiagArgs& a) {
 
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
-  const bool diverse = collective::kind_is_diverse(a.kind);
-  const double k = collective::kind_is_weak(a.kind) ? C.weak_stiffness : C.strong_stiffness;
+  const bool diverse = io::connector_kind(a.kind).diverse;
+  const double k = io::stiffness(cfg, a.kind);
   DIVCOLL_THROW_UNLESS(diverse || a.pairs <= pop, "--pairs " << a.pairs << " is more than the population (" << pop << ")");
   // the stage's replicate 0 of this kind: its initial weights and its first batch
   const uint64_t stream = 2000 + static_cast<uint64_t>(kind) * C.replicates;

@@ -57,7 +57,7 @@ struct RunConfig {
     double clip_norm{};              // global gradient norm clip
     double init_out_gain{};          // init gain of the connector network's output layer
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
-    std::string lr_schedule;         // constant | cosine | exponential (src/collective/connector_opt.hpp)
+    std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
     double lr_final{};               // the rate at the last iteration as a fraction of lr (decaying schedules)
     int bptt_window{};               // truncated backpropagation window, steps (0 = the whole episode)
     int grad_samples{};              // gradients averaged per step, at weights perturbed by N(0, grad_sigma²)

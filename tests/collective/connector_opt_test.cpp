@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 #include "morph/body.hpp"
 #include "testing.hpp"
 

@@ -1,4 +1,4 @@
-#include "collective/es_cmaes.hpp"
+#include "evo/es_cmaes.hpp"
 
 #include <pagmo/algorithms/cmaes.hpp>
 #include <pagmo/population.hpp>

@@ -1,4 +1,4 @@
-// pagmo2's CMA-ES as ask/tell (the black-box control of connector training, collective/connector_opt.hpp).
+// pagmo2's CMA-ES as ask/tell (the black-box control of connector training, evo/connector_opt.hpp).
 //
 // Why a file of its own: Debian's libpagmo is built for generic x86-64, where Eigen aligns its heap blocks to
 // 16 bytes; divcoll is built with -march=native, where Eigen (pacmap.cpp) aligns them to 64 bytes with its own

@@ -1,6 +1,6 @@
-#include "collective/connector_opt.hpp"
+#include "evo/connector_opt.hpp"
 
-#include "collective/es_cmaes.hpp"
+#include "evo/es_cmaes.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -190,7 +190,7 @@ void ConnectorOptimizer::tell(int it, const std::vector<ProbeResult>& results, d
   if (s_.optimizer == "adam")
     adam_.step(params_, g, lr, s_.clip_norm, it + 1);
   else
-    normalized_step(params_, g, lr);
+    evo::normalized_step(params_, g, lr);
 }
 
 void ConnectorOptimizer::finish(double validation) { offer(iterations_, validation); }

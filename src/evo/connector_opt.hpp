@@ -26,6 +26,7 @@
 
 #include "collective/builders.hpp"
 #include "collective/pairs.hpp"
+#include "evo/optim.hpp"
 
 namespace divcoll::collective {
 
@@ -123,7 +124,7 @@ class ConnectorOptimizer {
   std::vector<double> params_, best_params_;
   double best_score_;
   int best_it_ = -1;
-  Adam adam_;
+  evo::Adam adam_;
   std::vector<std::vector<double>> eps_;  // this iteration's perturbations (grad_samples > 1)
   std::unique_ptr<Es> es_;
   std::vector<double> es_log_;  // fitness of every cmaes candidate so far, iteration-major
