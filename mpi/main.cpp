@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   s->add_option("--out", sim.out, "trajectory file to write")->required();
   s->add_flag("--grad", sim.grad, "also write the gradient of travel (grad/*)");
   s->add_flag("--force", sim.force, "overwrite an existing output file");
+  s->add_option("--memory-limit-gb", sim.memory_limit_gb,
+                "refuse an episode whose tape and trajectory need more (default: 80% of MemAvailable)")
+      ->check(CLI::Range(0.0, 1e6));
 
   cli::SceneArgs sc;
   auto* c = app.add_subcommand("scene", "write the scene file of an agent, a pair or a chain in an environment");

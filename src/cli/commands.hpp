@@ -18,6 +18,7 @@ struct SimulateArgs {
   int steps = 1000;
   bool grad = false;
   bool force = false;
+  double memory_limit_gb = 0;  // 0: 80% of MemAvailable
 };
 int simulate(const SimulateArgs& a);
 
@@ -131,7 +132,8 @@ int schema(const std::string& check);
 // divcoll envs: the built-in environments
 int envs();
 
-// refuses to overwrite an existing file unless forced
-void check_output_path(const std::string& path, bool force);
+// refuses to overwrite an existing file unless forced, and always refuses an output that is a directory,
+// not a regular file (a device node: never replaced, even with --force), or one of `inputs`
+void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs = {});
 
 }  // namespace divcoll::cli

@@ -101,11 +101,20 @@ const std::vector<Key>& schema() {
         // [run]
         num("run", "seed", T::Int, "1", "[0, inf)", "",
             "run seed: every random draw is seeded by (seed, stage, item)", DIVCOLL_FIELD(run.seed)),
-        text("run", "name", "\"divcoll\"", "run name, used in output file names", DIVCOLL_FIELD(run.name)),
+        text("run", "name", "\"divcoll\"", "run name, used in output file names (a plain file name: no '/', not '..')",
+             DIVCOLL_FIELD(run.name)),
         pick("run", "stages", T::StringList, string_list(kStages), kStages,
              "stages to run; they always run in the order of the default list", DIVCOLL_FIELD(run.stages)),
         num("run", "progress_every_s", T::Double, "10.0", "[0, 86400]", "s",
             "time between progress lines (0 = none)", DIVCOLL_FIELD(run.progress_every_s)),
+        num("run", "stop_grace_s", T::Double, "120.0", "[0, 86400]", "s",
+            "after SIGTERM, SIGINT or SIGUSR1 the run stops right after its next checkpoint (exit 75), or after "
+            "this many seconds without one (exit 128 + signal; the last checkpoint is kept)",
+            DIVCOLL_FIELD(run.stop_grace_s)),
+        num("run", "memory_limit_gb", T::Double, "0.0", "[0, 1e6]", "GB",
+            "memory the simulators' tapes of all ranks on one node may take together; a run whose episodes "
+            "need more is refused before any work (0 = 80% of MemAvailable)",
+            DIVCOLL_FIELD(run.memory_limit_gb)),
         // [agents]
         num("agents", "population", T::Int, "100", "[2, 100000]", "agents", "size of the evolved population",
             DIVCOLL_FIELD(agents.population)),
@@ -773,6 +782,16 @@ RunConfig load_config(const std::string& path, const std::vector<std::string>& o
   DIVCOLL_THROW_UNLESS(in, "cannot read config file " << path);
   std::stringstream ss;
   ss << in.rdbuf();
+  // a file that sets nothing would silently start the paper-scale run (every key at its paper value)
+  bool empty = false;
+  try {
+    empty = toml::parse(ss.str(), path).empty();
+  } catch (const toml::parse_error&) {
+    // parse_config reports it with the line
+  }
+  DIVCOLL_THROW_UNLESS(!empty, path << " sets no key, so every key would take its paper-scale default (hours on "
+                                      "many cores); name a preset instead (configs/tiny.toml, configs/quick.toml, or "
+                                      "configs/paper.toml for the whole paper) or set the keys you mean");
   return parse_config(ss.str(), path, overrides);
 }
 
@@ -783,6 +802,12 @@ RunConfig apply_overrides(const RunConfig& cfg, const std::vector<std::string>& 
 void validate(const RunConfig& cfg) {
   RunConfig c = cfg;
   for (const Key& k : schema()) check_key(k, c);
+  // the run file is <output.dir>/<run.name>.h5: the name must not lead out of output.dir
+  const std::string& name = c.run.name;
+  DIVCOLL_THROW_UNLESS(name.find('/') == std::string::npos && name != "." && name != ".." &&
+                           std::none_of(name.begin(), name.end(), [](char ch) { return static_cast<unsigned char>(ch) < 32; }),
+                       "run.name = " << quoted(name) << " must be a plain file name (no '/', not '.' or '..', no control "
+                                     "characters): the run file is <output.dir>/<run.name>.h5");
   DIVCOLL_THROW_UNLESS(
       listed(c.deploy.environments, "flat"),
       "deploy.environments must list flat, the training environment every experiment compares "

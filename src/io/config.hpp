@@ -22,6 +22,8 @@ struct RunConfig {
     std::vector<std::string>
         stages;                 // stages to run, from agents connectors deploy specialists scaling graded analysis
     double progress_every_s{};  // seconds between progress lines (0 = none)
+    double stop_grace_s{};      // after SIGTERM/SIGINT/SIGUSR1: longest wait for the next checkpoint
+    double memory_limit_gb{};   // per node, for every rank's simulator tape together (0 = 80% of MemAvailable)
     bool operator==(const Run&) const = default;
   };
   struct Agents {

@@ -123,6 +123,8 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "run.name",
                                              "run.stages",
                                              "run.progress_every_s",
+                                             "run.stop_grace_s",
+                                             "run.memory_limit_gb",
                                              "agents.population",
                                              "agents.generations",
                                              "agents.epochs",
