@@ -175,8 +175,10 @@ const std::vector<Key>& schema() {
         num("connectors", "strong_stiffness", T::Double, "30000.0", "(0, 1e7]", "1/s^2",
             "spring stiffness of strong connectors (per unit mass)",
             DIVCOLL_FIELD(connectors.strong_stiffness)),
-        pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized"},
-             "connector optimizer: adam, or normalized = θ ← θ − lr·g/‖g‖",
+        pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
+             "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
+             "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "
+             "antithetic pairs θ ± es_sigma·ε, centred ranks, Adam on the search gradient (Salimans et al. 2017)",
              DIVCOLL_FIELD(connectors.optimizer)),
         num("connectors", "lr", T::Double, "0.003", "(0, 1]", "", "learning rate (adam) or step (normalized)",
             DIVCOLL_FIELD(connectors.lr)),
@@ -187,6 +189,39 @@ const std::vector<Key>& schema() {
             "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
         pick("connectors", "kinds", T::StringList, string_list(kKinds), kKinds, "connector kinds to train",
              DIVCOLL_FIELD(connectors.kinds)),
+        pick("connectors", "lr_schedule", T::Choice, "\"constant\"", {"constant", "cosine", "exponential"},
+             "learning-rate schedule over the iterations: constant, cosine (half a cosine from lr to "
+             "lr·lr_final) or exponential (geometric from lr to lr·lr_final)",
+             DIVCOLL_FIELD(connectors.lr_schedule)),
+        num("connectors", "lr_final", T::Double, "0.1", "(0, 1]", "",
+            "the rate at the last iteration as a fraction of lr (decaying schedules)",
+            DIVCOLL_FIELD(connectors.lr_final)),
+        num("connectors", "bptt_window", T::Int, "0", "[0, 1e7]", "steps",
+            "truncated backpropagation: the gradient of the per-window displacements, each window's start "
+            "state held fixed (0 = the whole episode)",
+            DIVCOLL_FIELD(connectors.bptt_window)),
+        num("connectors", "grad_samples", T::Int, "1", "[1, 1000]", "",
+            "gradients averaged per step (Gaussian smoothing): 1 = the gradient at the weights; more = at the "
+            "weights ± antithetic N(0, grad_sigma²) perturbations, same batch",
+            DIVCOLL_FIELD(connectors.grad_samples)),
+        num("connectors", "grad_sigma", T::Double, "0.01", "[0, 10]", "",
+            "standard deviation of each weight's perturbation (grad_samples > 1)",
+            DIVCOLL_FIELD(connectors.grad_sigma)),
+        flag("connectors", "keep_best", "false",
+             "return the weights with the best mean travel on a fixed validation batch (scored before every step "
+             "and after the last) instead of the last weights",
+             DIVCOLL_FIELD(connectors.keep_best)),
+        num("connectors", "validation_pairs", T::Int, "32", "[1, 1e6]", "pairs",
+            "pairs of the validation batch (keep_best): uniform kinds the clones of agents batch_pairs, "
+            "batch_pairs+1, ... (mod population: held out when the population exceeds batch_pairs), diverse "
+            "kinds fixed random pairs",
+            DIVCOLL_FIELD(connectors.validation_pairs)),
+        num("connectors", "es_popsize", T::Int, "16", "[5, 10000]", "",
+            "cmaes / es: candidate weight vectors per iteration, each run on the whole batch (es: pairs of them)",
+            DIVCOLL_FIELD(connectors.es_popsize)),
+        num("connectors", "es_sigma", T::Double, "0.02", "(0, 10]", "",
+            "cmaes: initial standard deviation of the search distribution per weight; es: sd of the perturbations",
+            DIVCOLL_FIELD(connectors.es_sigma)),
         // [deploy]
         num("deploy", "episode_steps", T::Int, "3000", "[1, 1e7]", "steps",
             "steps of one deployment episode (agents alone and collectives)",
