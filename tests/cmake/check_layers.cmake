@@ -1,6 +1,6 @@
 # The layering of divcoll's sources, checked: every `#include "..."` of a file under src/ or mpi/ may name
 # only a header of its own unit or of a unit below it (lower in the list). Run by ctest (build.layering):
-#   cmake -DROOT=<source dir> -P cmake/check_layers.cmake
+#   cmake -DROOT=<source dir> -P tests/cmake/check_layers.cmake
 # Units, from the bottom up, and what each is (the CMake targets of CMakeLists.txt follow the same cut):
 #   common nn sim        divcoll_engine   the engine and the MLP (no MPI, no HDF5, no TOML)
 #   config               divcoll_config   io/config.*, io/environments.*, io/pipeline.hpp (TOML)
@@ -47,7 +47,7 @@ set(checked 0)
 foreach(f IN LISTS files)
   divcoll_unit(${f} from)
   if(NOT DEFINED DIVCOLL_LEVEL_${from})
-    string(APPEND violations "\n  ${f}: not in a known unit (add its folder to cmake/check_layers.cmake)")
+    string(APPEND violations "\n  ${f}: not in a known unit (add its folder to tests/cmake/check_layers.cmake)")
     continue()
   endif()
   file(STRINGS ${ROOT}/${f} lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"")
@@ -66,7 +66,7 @@ foreach(f IN LISTS files)
   endforeach()
 endforeach()
 if(violations)
-  message(FATAL_ERROR "layering violated:${violations}\n(the layers, bottom up: ${DIVCOLL_UNITS}; see cmake/check_layers.cmake)")
+  message(FATAL_ERROR "layering violated:${violations}\n(the layers, bottom up: ${DIVCOLL_UNITS}; see tests/cmake/check_layers.cmake)")
 endif()
 list(LENGTH files n)
 message(STATUS "layering: ${n} files, ${checked} includes of the project, none upwards")
