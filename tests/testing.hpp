@@ -1,7 +1,10 @@
 // helpers shared by the tests: paths to shared test data and to the built binary, test agents
 #pragma once
 
+#include <sys/wait.h>
+
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -14,6 +17,21 @@ inline std::string parity_dir() { return std::string(DIVCOLL_SHARED_DIR) + "/tes
 inline std::string source_dir() { return DIVCOLL_SOURCE_DIR; }
 inline std::string divcoll_binary() { return DIVCOLL_BINARY; }
 // the text of README.md ("" if it cannot be read)
+// runs the divcoll binary with args (a shell word list); its exit code and its stdout and stderr together
+struct Exec {
+  int code;
+  std::string out;  // stdout and stderr
+};
+inline Exec run_divcoll(const std::string& args) {
+  const std::string cmd = divcoll_binary() + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int status = p ? pclose(p) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
 inline std::string readme() {
   std::ifstream in(source_dir() + "/README.md");
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

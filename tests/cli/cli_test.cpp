@@ -25,20 +25,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Exec {
-  int code;
-  std::string out;  // stdout and stderr
-};
-
-Exec run(const std::string& args) {
-  const std::string cmd = testing::divcoll_binary() + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[512];
-  while (p && fgets(buf, sizeof buf, p)) out += buf;
-  const int status = p ? pclose(p) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using testing::Exec;
+Exec run(const std::string& args) { return testing::run_divcoll(args); }
 
 class Cli : public ::testing::Test {
  protected:
