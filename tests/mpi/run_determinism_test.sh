@@ -12,11 +12,11 @@ W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 
 echo "== uninterrupted with 1, 2, 3 ranks"
-"$D" "$CMD" "$CFG" "${OVR[@]}" --out "$W/r1.h5" > "$W/r1.log"
-t0=$(date +%s.%N)
-mpirun -np 2 "$D" "$CMD" "$CFG" "${OVR[@]}" --out "$W/r2.h5" > "$W/r2.log"
-T=$(echo "$(date +%s.%N) - $t0" | bc -l)
-mpirun -np 3 "$D" "$CMD" "$CFG" "${OVR[@]}" --out "$W/r3.h5" > "$W/r3.log"
+# a progress line every round (run.progress_every_s=0): the kills below are placed by these lines, not by time
+"$D" "$CMD" "$CFG" "${OVR[@]}" run.progress_every_s=0 --out "$W/r1.h5" > "$W/r1.log"
+mpirun -np 2 "$D" "$CMD" "$CFG" "${OVR[@]}" run.progress_every_s=0 --out "$W/r2.h5" > "$W/r2.log" 2>&1
+N=$(wc -l < "$W/r2.log")
+mpirun -np 3 "$D" "$CMD" "$CFG" "${OVR[@]}" run.progress_every_s=0 --out "$W/r3.h5" > "$W/r3.log"
 "$D" compare "$W/r1.h5" "$W/r2.h5"
 "$D" compare "$W/r1.h5" "$W/r3.h5"
 
@@ -26,13 +26,23 @@ for trial in 1 2 3; do
   # start with 2 ranks; the output path is unique, so it names every process of the job
   mpirun -np 2 "$D" "$CMD" "$CFG" "${OVR[@]}" run.progress_every_s=0 --out "$W/k.h5" > "$W/k.log" 2>&1 &
   job=$!
-  # kill at a random moment between 30% and 80% of the uninterrupted 2-rank run's wall time: every
-  # process of the job at once (mpirun and the ranks, which Open MPI puts in process groups of their own)
-  sleep "$(echo "$T * (0.3 + 0.5 * $RANDOM / 32767)" | bc -l)"
+  # kill at a random point between 30% and 80% of the uninterrupted 2-rank run's progress lines (its log has N):
+  # the moment that line appears, every process of the job is frozen (SIGSTOP), so the kill lands there however
+  # fast or slow the machine is; then every process at once (mpirun and the ranks, which Open MPI puts in process
+  # groups of their own) is killed
+  L=$((N * 3 / 10 + RANDOM % (N / 2 + 1)))
+  for _ in $(seq 6000); do  # at most about 120 s
+    [ "$(wc -l < "$W/k.log")" -ge "$L" ] && break
+    kill -0 "$job" 2> /dev/null || break
+    sleep 0.02
+  done
+  pkill -STOP -f -- "--out $W/k.h5" || true
+  echo "trial $trial: frozen at log line $(wc -l < "$W/k.log") of $N (aimed at $L)"
   if [ "$trial" = 3 ]; then
     # one rank only (not mpirun): Open MPI must notice and end the others
     victim=$(pgrep -f -- "^$D $CMD .*--out $W/k.h5" | tail -1 || true)
     [ -n "$victim" ] && kill -9 "$victim"
+    pkill -CONT -f -- "--out $W/k.h5" || true
     ( sleep 60; pkill -9 -f -- "--out $W/k.h5" ) &  # a job that hangs instead of ending is killed (and fails below)
     watchdog=$!
     wait "$job" 2>/dev/null || true
