@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Installs what divcoll needs from Debian's packages, only what is missing (idempotent). Run as root.
+#   bash jobs/install-deps.sh [--test] [--log FILE]
+# Without --test: the build and runtime packages (README command 1, jobs/quickstart.sh). With --test also what
+# only the tests use (README command 2, jobs/test.sh): a private Slurm with munge, shellcheck, chromium.
+# apt's output goes to FILE when given (default: the terminal).
 set -euo pipefail
 
-PACKAGES=(
+BUILD_RUNTIME=(
   build-essential cmake pkg-config git bc
   libopenmpi-dev openmpi-bin
   libhdf5-openmpi-dev hdf5-tools
@@ -10,8 +14,25 @@ PACKAGES=(
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
   python3-h5py python3-numpy python3-matplotlib python3-scipy
-  shellcheck slurmctld slurmd slurm-client munge
+  ffmpeg
 )
+TEST_ONLY=(
+  shellcheck slurmctld slurmd slurm-client munge
+  chromium
+)
+
+mode=build
+log=/dev/stdout
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --test) mode="test" ;;
+    --log) log="$2"; shift ;;
+    *) echo "install-deps: unknown argument $1 (use --test, --log FILE)" >&2; exit 2 ;;
+  esac
+  shift
+done
+PACKAGES=("${BUILD_RUNTIME[@]}")
+[ "$mode" = test ] && PACKAGES+=("${TEST_ONLY[@]}")
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -25,7 +46,7 @@ if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi
 
-echo "install-deps: installing ${missing[*]}"
+echo "install-deps: installing ${#missing[@]} of ${#PACKAGES[@]} packages: ${missing[*]}"
 if [ "$(id -u)" -ne 0 ]; then
   echo "install-deps: missing packages and not root; run: sudo apt-get install ${missing[*]}" >&2
   exit 1
@@ -33,5 +54,7 @@ fi
 # wait for another apt to finish
 while fuser /var/lib/dpkg/lock-frontend >/dev/null 2>&1; do sleep 5; done
 export DEBIAN_FRONTEND=noninteractive
-apt-get update -q
-apt-get install -y -q --no-install-recommends "${missing[@]}"
+if ! { apt-get update -q && apt-get install -y -q --no-install-recommends "${missing[@]}"; } >>"$log" 2>&1; then
+  echo "install-deps: apt-get failed; its output is in $log" >&2
+  exit 1
+fi

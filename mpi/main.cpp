@@ -56,12 +56,21 @@ int main(int argc, char** argv) {
   d->add_option("--out", demo.out, "output folder");
   d->add_option("--env", demo.env, "the novel environment");
   d->add_option("--seed", demo.seed, "random seed");
-  d->add_option("--steps", demo.steps, "steps per episode")->check(CLI::Range(1, 10000000));
+  d->add_option("--steps", demo.steps, "steps per episode (without --run)")->check(CLI::Range(1, 10000000));
+  d->add_option("--run", demo.run, "run file whose trained agents and connector to use")->check(CLI::ExistingFile);
+  d->add_flag("--movie", demo.movie, "also render the episodes as MP4 (ffmpeg)");
 
   cli::ReportArgs rep;
   auto* rp = app.add_subcommand("report", "one page with the paper's claims beside a run file's numbers, and every figure");
   rp->add_option("run", rep.run, "run file, or a study folder (the robustness page)")->required()->check(CLI::ExistingPath);
-  rp->add_option("--out", rep.out, "output folder (report.md, table_s1.md, figures/)");
+  rp->add_option("--out", rep.out, "output folder (report.md, report.html, table_s1.md, figures/)");
+  rp->add_flag("--movie", rep.movie, "also render the supplementary movie (MP4, ffmpeg) into the page");
+
+  cli::MovieArgs mov;
+  auto* mv = app.add_subcommand("movie", "the paper's Supplementary Movie from a run file, as MP4 (ffmpeg)");
+  mv->add_option("run", mov.run, "run file")->required()->check(CLI::ExistingFile);
+  mv->add_option("--out", mov.out, "output folder");
+  mv->add_flag("--quick", mov.quick, "fewer frames and environments (tests)");
 
   cli::BenchArgs bench;
   auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
@@ -130,6 +139,7 @@ int main(int argc, char** argv) {
     if (*c) return cli::scene(sc);
     if (*d) return cli::demo(demo);
     if (*rp) return cli::report(rep);
+    if (*mv) return cli::movie(mov);
     if (*x) return cli::export_scene(ex);
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();

@@ -8,10 +8,10 @@
 Drawn: the terrain (segments of env/terrain, walls where heights jump), every spring coloured by its
 strain ℓ/L − 1 (blue shortened, red stretched; the actuation shows as strain), connector springs thicker,
 masses as dots in one colour per agent (filled when touching the ground), the collective's centre of
-mass as a cross, time and travel so far in the corner. The camera follows the centre of mass.
+mass as a cross, time and travel so far (BL) in the corner. For MP4 at 1280×720 with environment cues and a
+colour bar, use movie.py --episode. The camera follows the centre of mass.
 """
 import argparse
-import os
 import sys
 
 import h5py
@@ -51,6 +51,8 @@ class Episode:
         self.agent_of = np.zeros(self.x.shape[1], int)
         for a, row in enumerate(self.mass_index):
             self.agent_of[row] = a
+        # body length (SPEC §1): the mean over agents of the x extent at step 0 (the rest positions as placed)
+        self.bl = float(np.mean([np.ptp(self.x[0, row, 0]) for row in self.mass_index]))
 
     def strain(self, t):
         d = self.x[t, self.si] - self.x[t, self.sj]
@@ -94,8 +96,8 @@ def draw_frame(ax, ep, t, half_width=0.6, title=None):
                edgecolors=colours, linewidths=1.0, zorder=3)
     ax.plot(com[0], com[1], "k+", ms=8, zorder=4)
     travel = com[0] - ep.x[0].mean(0)[0]
-    ax.text(0.02, 0.95, f"t = {t * ep.dt:.2f} s   travel {travel:+.3f} u", transform=ax.transAxes, va="top",
-            fontsize=8)
+    ax.text(0.02, 0.95, f"t = {t * ep.dt:.2f} s   travel {travel / ep.bl:+.2f} BL", transform=ax.transAxes,
+            va="top", fontsize=8)
     ax.set_xlim(x0, x1)
     ax.set_ylim(min(ty.min(), com[1] - 0.2) - 0.05, com[1] + 0.35)
     ax.set_aspect("equal")
@@ -110,7 +112,7 @@ def animate(scene, traj, out, every=10, fps=25):
     ep = Episode(scene, traj)
     frames = list(range(0, ep.x.shape[0], every))
     fig, ax = plt.subplots(figsize=(6, 3.4), dpi=90)
-    title = f"{os.path.basename(scene)} in {ep.env}"
+    title = f"{ep.env.replace('_', ' ')}: {ep.x.shape[1] // 11} agent(s), {ep.x.shape[0] - 1} steps"
 
     def update(k):
         draw_frame(ax, ep, frames[k], title=title)

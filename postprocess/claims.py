@@ -1,11 +1,15 @@
 """The paper's claims, each tested against a run file's numbers.
 
 Each claim is a function of the run file returning (number text, verdict) where verdict is "held",
-"did not hold" or "not measured" (its stage is missing or not complete). Means are over ok episodes only, and
+"did not hold" or "not measured" (its stage is missing or not complete, or its number is not finite). A claim is
+judged only where the run has the counts its test needs (NEEDS: agents, pairs, replicates, iterations,
+specialists, chains, states); a smaller run (the quick and tiny presets) gets "too small to judge", with the count
+that is short. `scale(path)` compares the run's counts with the paper's. Means are over ok episodes only, and
 "novel" means are means of per-environment means (summary.py). The claims of Fig. 3 and Table S1 read the
 analysis stage's stored statistics (divcoll_post/analysis.py); "significantly" means Welch's p < 0.05. Used by
 report.py; `claims(path)` lists them.
 """
+import re
 import tomllib
 
 import h5py
@@ -302,9 +306,100 @@ def c_wind_unfamiliar(r):
         return "no wind environment in the familiarity results", "not measured"
     t = fam.best_table()[fam.envs.index(A.WIND)]
     d_one, u_one = t[1, 0] + t[2, 0], t[1, 1] + t[2, 1]
-    return (f"wind, mean states: in both — diverse-trained {t[0, 0]:.1f}, uniform-trained {t[0, 1]:.1f}; unique to "
-            f"training or wind — diverse-trained {d_one:.1f}, uniform-trained {u_one:.1f}"), \
+    return (f"wind, mean states: in both: diverse-trained {t[0, 0]:.1f}, uniform-trained {t[0, 1]:.1f}; unique to "
+            f"training or wind: diverse-trained {d_one:.1f}, uniform-trained {u_one:.1f}"), \
         verdict(t[0, 0] > t[0, 1] and u_one > d_one)
+
+
+# the paper's counts (configs/paper.toml) and the run's, by config key: (key, what it counts, paper value)
+SCALE = [
+    ("agents.population", "agents in the evolved population", 100),
+    ("agents.generations", "generations of evolution", 15),
+    ("agents.epochs", "gradient-descent epochs per training", 15),
+    ("connectors.replicates", "connector replicates per kind", 10),
+    ("connectors.iterations", "connector training iterations", 100),
+    ("connectors.batch_pairs", "pairs per training batch", 100),
+    ("deploy.pairs", "deployed pairs per replicate", 100),
+    ("deploy.environments", "environments", 13),
+    ("deploy.episode_steps", "steps per deployment", 3000),
+    ("specialists.replicates", "specialists per novel environment", 10),
+    ("specialists.iterations", "specialist training iterations", 100),
+    ("scaling.sizes", "chain sizes", "5, 10, 20"),
+    ("scaling.draws", "chains per replicate, size and variant", 100),
+    ("graded.population", "agents per graded population", 100),
+    ("analysis.max_states", "hidden states per environment in one PaCMAP fit", 10000),
+]
+
+
+def config(path):
+    with h5py.File(path, "r") as f:
+        return tomllib.loads(_s(f.attrs.get("config", "")))
+
+
+def key(cfg, k):
+    sec, name = k.split(".")
+    v = cfg.get(sec, {}).get(name)
+    if k == "deploy.environments" and isinstance(v, list):
+        return len(v)
+    return v
+
+
+def scale(path):
+    """(preset name, [(what, key, this run, paper)]) for the report's header"""
+    cfg = config(path)
+    name = cfg.get("run", {}).get("name", "?")
+    rows = []
+    for k, what, paper in SCALE:
+        v = key(cfg, k)
+        rows.append((what, k, ", ".join(map(str, v)) if isinstance(v, list) else v, paper))
+    return name, rows
+
+
+# the counts each claim's test needs: (config key, minimum, why). Thresholds sit at about half the paper's counts:
+# enough replicates for a Welch test between replicate means, enough pairs for a mean over pairs to settle, enough
+# training for the "trained" in a claim to mean trained.
+AGENTS = [("agents.population", 50, "agents"), ("agents.generations", 10, "generations")]
+TRAINED = [("connectors.replicates", 5, "connector replicates"), ("connectors.iterations", 50, "training iterations"),
+           ("connectors.batch_pairs", 50, "pairs per batch")]
+DEPLOY = AGENTS + TRAINED + [("deploy.pairs", 50, "deployed pairs")]
+NOVEL = DEPLOY + [("deploy.environments", 7, "environments")]
+NEEDS = {
+    "c_agents_trained": AGENTS,
+    "c_agents_drop": NOVEL,
+    "c_untrained_drop": AGENTS + [("connectors.batch_pairs", 50, "pairs per batch")],
+    "c_trained_beat_alone": DEPLOY,
+    "c_weak_diverse_best_flat": DEPLOY,
+    "c_all_drop_novel": NOVEL,
+    "c_weak_diverse_best_novel": NOVEL,
+    "c_transplant": DEPLOY,
+    "c_weak_diverse_most_envs": NOVEL,
+    "c_specialists": NOVEL + [("specialists.replicates", 5, "specialists per environment"),
+                              ("specialists.iterations", 50, "specialist iterations")],
+    "c_scaling": DEPLOY + [("scaling.chains", 100, "chains per size and variant (replicates × draws)"),
+                           ("scaling.n_sizes", 3, "chain sizes")],
+    "c_graded": NOVEL + [("graded.population", 50, "agents per graded population")],
+}
+ANALYSIS_NEEDS = DEPLOY + [("analysis.max_states", 5000, "hidden states per PaCMAP fit")]
+
+
+def short_of(cfg, needs):
+    """the counts below their minimum, as text ('' when the run is large enough)"""
+    short = []
+    for k, least, what in needs:
+        if k == "scaling.chains":
+            v = (key(cfg, "connectors.replicates") or 0) * (key(cfg, "scaling.draws") or 0)
+        elif k == "scaling.n_sizes":
+            v = len(key(cfg, "scaling.sizes") or [])
+        else:
+            v = key(cfg, k)
+        if v is None or v < least:
+            short.append(f"{what} {v} (needs ≥ {least})")
+    return "; ".join(short)
+
+
+def not_finite(number):
+    """a claim's number text built from a NaN or infinity (f3/g3 print those as —)"""
+    return "—" in number or re.search(r"\b(nan|inf)\b", number, re.I) is not None
 
 
 CLAIMS = [
@@ -342,12 +437,21 @@ CLAIMS = [
 
 
 def claims(path):
+    """[(claim, number text, verdict, needs)]: verdict held / did not hold / not measured / too small to judge;
+    needs = the counts the test needs (and which are short)"""
     r = Run(path)
+    cfg = config(path)
     out = []
     for text, fn in CLAIMS:
+        needs = NEEDS.get(fn.__name__, ANALYSIS_NEEDS)
         try:
             number, v = fn(r)
         except (KeyError, ValueError, IndexError) as e:
             number, v = f"cannot evaluate: {e}", "not measured"
-        out.append((text, number, v))
+        if v != "not measured" and not_finite(number): v = "not measured"  # noqa: E701 (one line: reliab may edit it)
+        short = short_of(cfg, needs)
+        if v in ("held", "did not hold") and short:
+            v = "too small to judge"
+        need = ", ".join(f"{what} ≥ {least}" for _, least, what in needs)
+        out.append((text, number, v, f"short: {short}" if short else f"has {need}"))
     return out

@@ -20,10 +20,12 @@ on clones (orange, hatched, dashed outline, as in fig2.py) and diverse-trained o
 (b, c) One PaCMAP fit of the connector's hidden states in flat (training) and in one novel environment (--env,
     default wind; the first novel environment done when it is absent), replicate --replicate, for the
     uniform-trained (b) and the diverse-trained (c) connector. Coordinates are rounded half to even
-    (numpy.round) into unit cells; each state is coloured by its cell: holding both training and novel
-    states, only training or only novel states. The classification is recomputed here from the embedding
-    and n_states and checked against the stored counts (a mismatch is printed and written on the panel).
-    Overlapping points darken: opacity shows how often a percept occurred.
+    (numpy.round) into unit cells; each state falls in a cell holding both training and novel states, only
+    training or only novel states. Each fit is drawn as three panels, one per class, with the class's count
+    of states and cells in the title: every state in light grey, the class's states on top in colour
+    (training circles, novel crosses), so the few training-only and novel-only states (tens among
+    thousands) are visible. The classification is recomputed here from the embedding and n_states and
+    checked against the stored counts (a mismatch is printed and written on the panel).
 
 Exit status: 0 done; 2 the file is not a divcoll run file, has no analysis stage, or lacks the datasets the
 figure needs (message on stderr). An analysis stage that is not complete is drawn from what is there, with a
@@ -50,9 +52,7 @@ from fig2 import BLUE, ORANGE, bar_style  # noqa: E402
 
 STEM = "fig3_adversity_familiarity"
 YLABEL = "DTW distance per step (u)"
-CLASS_COLOR = {0: "#6a3d9a", 1: "#8c8c8c", 2: "#e31a1c"}  # both, train-only, novel-only
-CLASS_NAME = {0: "cell holds training and novel states", 1: "cell holds only training states",
-              2: "cell holds only novel states"}
+CLASS_COLOR = {0: "#6a3d9a", 1: "#1a9850", 2: "#e31a1c"}  # both, train-only, novel-only
 TYPE_STYLE = {A.UNIFORM: ("weak_uniform", "uniform"), A.DIVERSE: ("weak_diverse", "diverse")}
 
 
@@ -135,11 +135,17 @@ def panel_a(ax, adv, B):
                        Patch(facecolor=BLUE, edgecolor=BLUE, label="diverse-trained, on diverse pairs"),
                        Line2D([], [], color="#505050", marker="o", ls="", markersize=3, label="replicate means"),
                        Line2D([], [], color="black", marker="_", ls="", markersize=8, label="95% bootstrap CI")],
-              fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
+              fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=2, frameon=False)
 
 
-def familiarity_panel(ax, an: A.Analysis, t, env, rep, letter):
-    """scatter of one fit; returns a mismatch message or None"""
+CLASS_SHORT = {0: "cells with training and novel states", 1: "cells with training states only",
+               2: "cells with novel states only"}
+
+
+def familiarity_row(axes, an: A.Analysis, t, env, rep, letter):
+    """one fit drawn as three panels, one per cell class: every state of the fit in light grey for context, the
+    states of the panel's class on top in its colour (so the rare classes are not buried); the counts in the
+    titles. Returns a mismatch message or None"""
     e = an.familiarity.envs.index(env)
     tr, nv = an.embedding(t, env, rep)
     label, counts = A.classify_cells(tr, nv)
@@ -150,30 +156,46 @@ def familiarity_panel(ax, an: A.Analysis, t, env, rep, letter):
                f"{counts.astype(int).tolist()}, the run file's counts are {stored.tolist()}")
     xy = np.concatenate([tr, nv])
     n = xy.shape[0]
-    alpha = float(np.clip(300.0 / max(n, 1), 0.04, 0.8))
-    for k in (0, 1, 2):  # the rarer classes on top
-        sel = label == k
-        if sel.any():
-            ax.scatter(xy[sel, 0], xy[sel, 1], s=4, color=CLASS_COLOR[k], alpha=alpha, lw=0, zorder=2 + k,
-                       rasterized=True)
-    if n == 0:
-        ax.text(0.5, 0.5, "no states", transform=ax.transAxes, ha="center", va="center", color="#c00000")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("PaCMAP dimension 1 (unit cells)")
-    ax.set_ylabel("PaCMAP dimension 2 (unit cells)")
+    is_novel = np.r_[np.zeros(len(tr), bool), np.ones(len(nv), bool)]
+    c = counts.astype(int)
     kind, _ = TYPE_STYLE[t]
     color = ORANGE if kind.endswith("uniform") else BLUE
-    c = counts.astype(int)
-    short = "uniform-trained connector, clones" if t == A.UNIFORM else "diverse-trained connector, diverse pairs"
-    ax.set_title(f"({letter}) {short}\nflat + {env.replace('_', ' ')}, replicate {rep}: {len(tr)} + {len(nv)} states\n"
-                 f"states in cells: both {c[0]} · training only {c[1]} · novel only {c[2]}\n"
-                 f"cells: both {c[3]} · training only {c[4]} · novel only {c[5]}", loc="left", fontsize=8.5)
-    for s in ax.spines.values():
-        s.set_edgecolor(color)
-        s.set_linewidth(1.6)
-    if msg:
-        ax.text(0.02, 0.02, "counts differ from the run file's!", transform=ax.transAxes, color="#c00000",
-                fontsize=8, va="bottom")
+    short = "uniform-trained connector on clones" if t == A.UNIFORM else "diverse-trained connector on diverse pairs"
+    pad = 1.0
+    lim = ((xy[:, 0].min() - pad, xy[:, 0].max() + pad), (xy[:, 1].min() - pad, xy[:, 1].max() + pad)) if n else None
+    for k, ax in enumerate(axes):
+        if n:
+            ax.scatter(xy[:, 0], xy[:, 1], s=2, color="#d0d0d0", lw=0, zorder=1, rasterized=True)
+            sel = label == k
+            # within the class, training states as circles and novel ones as crosses
+            for nov, marker in ((False, "o"), (True, "x")):
+                m = sel & (is_novel == nov)
+                if m.any():
+                    ax.scatter(xy[m, 0], xy[m, 1], s=9 if k else 3, marker=marker, color=CLASS_COLOR[k],
+                               alpha=0.35 if k == 0 else 0.9, lw=0.8 if marker == "x" else 0, zorder=2 + k,
+                               rasterized=True)
+            ax.set_xlim(*lim[0])
+            ax.set_ylim(*lim[1])
+        else:
+            ax.text(0.5, 0.5, "no states", transform=ax.transAxes, ha="center", va="center", color="#c00000")
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        share = 100.0 * c[k] / max(c[0] + c[1] + c[2], 1)
+        ax.set_title(f"{CLASS_SHORT[k]}\n{c[k]} states ({share:.1f}%), {c[3 + k]} cells", fontsize=8.5,
+                     color=CLASS_COLOR[k])
+        for sp in ax.spines.values():
+            sp.set_edgecolor(color)
+            sp.set_linewidth(1.4)
+        if msg:
+            ax.text(0.02, 0.02, "counts differ from the run file's!", transform=ax.transAxes, color="#c00000",
+                    fontsize=7, va="bottom")
+    axes[0].set_ylabel("PaCMAP dimension 2", fontsize=8)
+    axes[0].text(-0.02, 1.32, f"({letter}) {short}: flat + {env.replace('_', ' ')}, replicate {rep}, "
+                 f"{len(tr)} training + {len(nv)} novel states", transform=axes[0].transAxes, fontsize=10,
+                 fontweight="bold", va="bottom", color=color)
+    for ax in axes:
+        ax.set_xlabel("PaCMAP dimension 1", fontsize=8)
     return msg
 
 
@@ -199,21 +221,20 @@ def draw(args) -> list:
         raise R.RunFileError(f"{args.run}: --replicate {args.replicate} out of range 0..{fam.replicates - 1}")
     B = adversity_bars(adv, n_boot=args.boot, seed=args.boot_seed)
 
-    fig = plt.figure(figsize=(16.5, 7.0))
-    gs = fig.add_gridspec(1, 3, width_ratios=[1.25, 1, 1], left=0.05, right=0.99, top=0.80, bottom=0.25,
-                          wspace=0.25)
-    ax_a = fig.add_subplot(gs[0, 0])
+    fig = plt.figure(figsize=(17.0, 10.0))
+    gs = fig.add_gridspec(2, 4, width_ratios=[1.5, 1, 1, 1], left=0.05, right=0.99, top=0.86, bottom=0.21,
+                          wspace=0.12, hspace=0.55)
+    ax_a = fig.add_subplot(gs[:, 0])
     panel_a(ax_a, adv, B)
     msgs = []
     for i, (t, letter) in enumerate(((A.UNIFORM, "b"), (A.DIVERSE, "c"))):
-        ax = fig.add_subplot(gs[0, 1 + i])
-        m = familiarity_panel(ax, an, t, env, args.replicate, letter)
+        axes = [fig.add_subplot(gs[i, 1 + k]) for k in range(3)]
+        m = familiarity_row(axes, an, t, env, args.replicate, letter)
         if m:
             msgs.append(m)
             warn(m)
-    fig.legend(handles=[Line2D([], [], color=CLASS_COLOR[k], marker="o", ls="", markersize=5, label=CLASS_NAME[k])
-                        for k in (0, 1, 2)],
-               loc="upper center", bbox_to_anchor=(0.69, 0.165), ncol=3, fontsize=8, frameon=False)
+    fig.text(0.70, 0.155, "grey: every state of the fit · in colour: the states of the panel's class "
+             "(circles: training, crosses: novel)", ha="center", fontsize=8.5, color="#333333")
 
     title = f"Fig. 3 — internal adversity (a) and familiarity of a novel environment (b, c), {R.run_title(meta)}"
     if not an.complete:
@@ -233,8 +254,8 @@ def draw(args) -> list:
         "Worse/better error bars and p: the analysis stage's (bootstrap over replicate means"
         + (f", {nboot} resamples" if nboot else "") + f"; Welch); all agents: computed here ({args.boot} resamples, "
         f"seed {args.boot_seed}; Welch).",
-        f"(b, c) PaCMAP of the 32-D connector hidden states, flat (training) + {env}; coordinates rounded half to even "
-        f"into unit cells, classes recomputed from the embedding"
+        f"(b, c) PaCMAP of the 32-D connector hidden states, flat (training) + {env}, one panel per cell class; "
+        f"coordinates rounded half to even into unit cells, classes recomputed from the embedding"
         + (" and equal to the run file's counts." if not msgs else " — DIFFERENT from the run file's counts (see stderr).")
         + (f" [{note}]" if note else ""),
     ]

@@ -1,10 +1,15 @@
 #!/usr/bin/python3
-"""One self-contained Markdown page for a run file: provenance, the paper's claims beside this run's
-numbers with a verdict each, the summary tables, and every figure the postprocess scripts can draw.
+"""The report of a run file, as a Markdown page and a self-contained HTML page: the preset and its counts
+against the paper's, provenance, the paper's claims beside this run's numbers with a verdict each, the
+summary tables, every figure the postprocess scripts can draw, and movies.
 
-    /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll]
+    divcoll report RUN.h5 [--out DIR] [--movie]
+    /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll] [--movie]
 
-Writes DIR/report.md, DIR/table_s1.md and DIR/figures/*. A figure script that fails (for example because its
+Writes DIR/report.md, DIR/report.html (report_html.py: figures embedded, movies as <video controls> beside
+it, every number of Fig. 2A linked to the `divcoll export` command of its episode), DIR/table_s1.md,
+DIR/figures/* (motion_<env>.mp4: a uniform and a diverse pair side by side) and with --movie DIR/movie/*
+(movie.py: the paper's Supplementary Movie). A figure script that fails (for example because its
 stage is missing from the run file) is listed with its message instead of its figure; the page is still written.
 Fig. 3 and Table S1 (the analysis stage) are skipped with a note unless the analysis stage is complete.
 """
@@ -18,6 +23,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
 import claims  # noqa: E402
+import report_html  # noqa: E402
 import summary  # noqa: E402
 from divcoll_post import analysis as A  # noqa: E402
 
@@ -78,9 +84,9 @@ def draw_figures(run, fig_dir, divcoll, skip=None):
     return notes
 
 
-def motion_section(fig_dir, out_dir):
-    """two animations (the uniform and the diverse weak pair in one novel environment) from the episode
-    files contact_sheet.py exported, and links to the contact sheet and every exported episode"""
+def motion_section(fig_dir, out_dir, quick=False):
+    """a movie of the uniform and the diverse weak pair side by side in one novel environment (MP4, movie.py),
+    from the episode files contact_sheet.py exported, and where every exported episode is"""
     head = ["## Motion", ""]
     ep_dir = os.path.join(fig_dir, "episodes")
     scenes = sorted(glob.glob(os.path.join(ep_dir, "*_scene.h5")))
@@ -92,47 +98,79 @@ def motion_section(fig_dir, out_dir):
         if env not in envs:
             envs.append(env)
     pick = "wind" if "wind" in envs else next((e for e in envs if e != "flat"), envs[0])
-    lines = head + [f"Animations of pair 0 of replicate 0 in **{pick}** (springs coloured by strain, blue "
-                    "shortened, red stretched; the camera follows the centre of mass):", ""]
-    import animate  # noqa: E402 (matplotlib animation; only needed here)
-    for sc in scenes:
-        if not os.path.basename(sc).startswith(pick + "_weak_"):
-            continue
-        traj = sc.replace("_scene.h5", "_traj.h5")
-        gif = sc.replace("_scene.h5", ".gif")
-        try:
-            animate.animate(sc, traj, gif, every=20)
-            rel = os.path.relpath(gif, out_dir)
-            lines.append(f"- [{os.path.basename(gif)}]({rel})")
-        except Exception as e:  # a broken episode file is reported, the page is still written
-            lines.append(f"- {os.path.basename(sc)}: not animated ({e})")
+    lines = head + [f"Pair 0 of replicate 0 in **{pick}**, the uniform pair (weak uniform-trained connector) beside "
+                    "the diverse pair (weak diverse-trained connector); springs coloured by strain, travel in BL, "
+                    "the camera follows each centre of mass:", ""]
+    import movie  # noqa: E402 (matplotlib and ffmpeg; only needed here)
+    mine = [sc for sc in scenes if os.path.basename(sc).startswith(pick + "_weak_")]
+    mp4 = os.path.join(fig_dir, f"motion_{pick}.mp4")
+    try:
+        clips = []
+        for sc in sorted(mine, key=lambda p: "diverse_at_diverse" in p):  # uniform first
+            c = movie.Clip(sc, sc.replace("_scene.h5", "_traj.h5"), "")
+            c.title = ("uniform pair, weak uniform-trained" if "uniform_at_uniform" in sc
+                       else "diverse pair, weak diverse-trained")
+            clips.append(c)
+        movie.render(mp4, clips, f"{pick.replace('_', ' ')}: uniform vs diverse pair", quick=quick,
+                     every=60 if quick else 30)
+        lines.append(f"[{os.path.basename(mp4)}]({os.path.relpath(mp4, out_dir)})")
+    except Exception as e:  # a broken episode file or no ffmpeg is reported, the page is still written
+        lines.append(f"Not rendered: {e}")
     lines += ["", f"The contact sheet (last step of every environment) is `figures/contact_sheet.png`; the scene and "
               f"trajectory files of all its episodes are in `{os.path.relpath(ep_dir, out_dir)}/`. Any other "
               "episode: `divcoll export RUN.h5 --what pair --env ENV --type TYPE --pair Q --out S.h5`, "
               "`divcoll simulate --scene S.h5 --steps T --out T.h5`, "
-              "`/usr/bin/python3 postprocess/animate.py S.h5 T.h5 --out episode.gif`.", ""]
+              "`/usr/bin/python3 postprocess/movie.py --episode S.h5 T.h5 --out episode.mp4`.", ""]
     return lines
 
 
-def write_report(run, out_dir, divcoll):
+def movie_section(run, out_dir, divcoll):
+    """the paper's Supplementary Movie (movie.py) in out_dir/movie"""
+    head = ["## Supplementary Movie", ""]
+    import movie  # noqa: E402
+    try:
+        paths = movie.supplementary(run, os.path.join(out_dir, "movie"), divcoll)
+    except Exception as e:
+        return head + [f"Not rendered: {e}", ""]
+    names = ["the whole movie", "agent optimisation", "connector optimisation", "deployment, uniform vs diverse"]
+    return head + [f"- {n}: [{os.path.basename(p)}]({os.path.relpath(p, out_dir)})" for n, p in zip(names, paths)] + [""]
+
+
+def scale_section(run):
+    """the preset and its counts against the paper's"""
+    name, rows = claims.scale(run)
+    small = [r for r in rows if isinstance(r[2], (int, float)) and isinstance(r[3], (int, float)) and r[2] < r[3]]
+    if small:
+        verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** Claims are judged "
+                   "only where the run has the counts their tests need; the others read *too small to judge*, with "
+                   "the count that is short. The paper-scale results are in the README.")
+    else:
+        verdict = f"**Preset `{name}`: the paper's counts or more.**"
+    out = [verdict, "", "| count | config key | this run | paper |", "|---|---|---|---|"]
+    out += [f"| {what} | `{k}` | {v} | {p} |" for what, k, v, p in rows]
+    return out + [""]
+
+
+def write_report(run, out_dir, divcoll, movie=False, quick=False):
     fig_dir = os.path.join(out_dir, "figures")
     os.makedirs(fig_dir, exist_ok=True)
     skip = analysis_skip(run)
     notes = draw_figures(run, fig_dir, divcoll, skip)
     lines = [summary.summarize(run).replace("# divcoll run summary", "# divcoll report", 1), ""]
     table = ["## The paper's claims beside this run", "",
-             "| claim | this run | verdict |", "|---|---|---|"]
-    verdicts = {"held": 0, "did not hold": 0, "not measured": 0}
-    for text, number, v in claims.claims(run):
+             "| claim | this run | verdict | counts the test needs |", "|---|---|---|---|"]
+    verdicts = {"held": 0, "did not hold": 0, "too small to judge": 0, "not measured": 0}
+    for text, number, v, needs in claims.claims(run):
         verdicts[v] += 1
-        table.append(f"| {text} | {number} | **{v}** |")
-    table += ["", f"{verdicts['held']} held, {verdicts['did not hold']} did not hold, "
-                  f"{verdicts['not measured']} not measured.", ""]
-    # the claims go first, after the provenance paragraph
+        table.append(f"| {text} | {number} | **{v}** | {needs} |")
+    table += ["", ", ".join(f"{n} {v}" for v, n in verdicts.items()) + ".", ""]
+    # the preset and the claims go first, after the provenance paragraph
     head, _, rest = lines[0].partition("\n\n| stage")
-    page = [head, "", *table, "## Stages and numbers", "", "| stage" + rest]
+    page = [head, "", *scale_section(run), *table, "## Stages and numbers", "", "| stage" + rest]
     page += table_s1_section(run, out_dir, skip)
-    page += motion_section(fig_dir, out_dir)
+    page += motion_section(fig_dir, out_dir, quick)
+    if movie:
+        page += movie_section(run, out_dir, divcoll)
     page += ["## Figures", ""]
     pngs = sorted(glob.glob(os.path.join(fig_dir, "*.png")))
     for png in pngs:
@@ -143,6 +181,7 @@ def write_report(run, out_dir, divcoll):
     path = os.path.join(out_dir, "report.md")
     with open(path, "w") as fh:
         fh.write("\n".join(page) + "\n")
+    report_html.write(run, out_dir, "\n".join(page))
     return path, len(pngs), verdicts
 
 
@@ -151,6 +190,8 @@ def main(argv=None):
     ap.add_argument("run", help="divcoll run file")
     ap.add_argument("--out", default="out/report", help="output folder")
     ap.add_argument("--divcoll", default=os.path.join(HERE, "..", "build", "divcoll"), help="the divcoll binary")
+    ap.add_argument("--movie", action="store_true", help="also render the Supplementary Movie (movie.py)")
+    ap.add_argument("--quick", action="store_true", help="smaller, fewer movie frames (tests)")
     a = ap.parse_args(argv)
     if not os.path.exists(a.run):
         print(f"report: no such run file: {a.run}", file=sys.stderr)
@@ -168,12 +209,12 @@ def main(argv=None):
         print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
         return 2
     try:
-        path, n, v = write_report(a.run, a.out, a.divcoll)
+        path, n, v = write_report(a.run, a.out, a.divcoll, a.movie, a.quick)
     except (OSError, KeyError) as e:
         print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
         return 2
-    print(f"report: wrote {path} ({n} figures; claims: {v['held']} held, {v['did not hold']} did not hold, "
-          f"{v['not measured']} not measured)")
+    print(f"report: wrote {path} and {os.path.join(a.out, 'report.html')} ({n} figures; claims: "
+          + ", ".join(f"{k} {x}" for x, k in v.items()) + ")")
     return 0
 
 

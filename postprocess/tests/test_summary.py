@@ -16,7 +16,15 @@ import claims  # noqa: E402
 import summary  # noqa: E402
 
 
+# the paper's counts: claims are judged only where a run has the counts their tests need
+PAPER = ('[run]\nname = "synthetic"\n[agents]\npopulation = 100\ngenerations = 15\n[connectors]\nreplicates = 10\n'
+         'iterations = 100\nbatch_pairs = 100\n[deploy]\npairs = 100\nenvironments = ["flat", "ice", "gap"]\n')
+QUICK = PAPER.replace("population = 100", "population = 24").replace("replicates = 10", "replicates = 2")
+
+
 class SummaryTest(unittest.TestCase):
+    config = PAPER
+
     def setUp(self):
         self.dir = tempfile.TemporaryDirectory()
         self.path = os.path.join(self.dir.name, "run.h5")
@@ -25,6 +33,7 @@ class SummaryTest(unittest.TestCase):
         with h5py.File(self.path, "w") as f:
             f.attrs["format"] = "divcoll-run"
             f.attrs["seed"] = 1
+            f.attrs["config"] = self.config
             d = f.create_group("deploy")
             d.attrs["status"] = "complete"
             d.attrs["environments"] = ",".join(envs)
@@ -61,7 +70,7 @@ class SummaryTest(unittest.TestCase):
         self.assertIn("best type in the novel environments: weak_uniform@diverse (0.800 BL)", text)
 
     def test_claims_follow_the_numbers_and_missing_stages_are_not_measured(self):
-        got = {text: (number, v) for text, number, v in claims.claims(self.path)}
+        got = {text: (number, v) for text, number, v, _ in claims.claims(self.path)}
         by_start = lambda s: next(v for k, v in got.items() if k.startswith(s))  # noqa: E731
         # weak_uniform@uniform (2.0 BL) beats agents alone (1.0 BL, the nan episode left out) on flat
         number, v = by_start("Trained collectives of all four kinds")
@@ -71,10 +80,42 @@ class SummaryTest(unittest.TestCase):
         self.assertEqual(by_start("Trained agents travel")[1], "not measured")  # no agents stage in the file
         self.assertEqual(by_start("The advantage of diversity grows")[1], "not measured")
 
+    def test_scale_names_the_preset_and_the_papers_counts(self):
+        name, rows = claims.scale(self.path)
+        self.assertEqual(name, "synthetic")
+        row = next(r for r in rows if r[1] == "deploy.pairs")
+        self.assertEqual(row[2:], (100, 100))
+        self.assertEqual(next(r for r in rows if r[1] == "deploy.environments")[2], 3)
+
+    def test_a_claim_from_a_nan_is_not_measured(self):
+        with h5py.File(self.path, "r+") as f:
+            c = f["deploy/collectives/travel_bl"][()]
+            c[0, 0] = np.nan  # every flat episode of weak_uniform@uniform: its flat mean is NaN
+            f["deploy/collectives/travel_bl"][...] = c
+        got = {text: (number, v) for text, number, v, _ in claims.claims(self.path)}
+        number, v = next(val for k, val in got.items() if k.startswith("Trained collectives of all four kinds"))
+        self.assertIn("weak_uniform@uniform —", number)
+        self.assertEqual(v, "not measured")
+
     def test_ok_mean_of_nothing_is_nan_not_zero(self):
         m, bad = summary.ok_mean([1.0, 2.0], [1, 2])
         self.assertTrue(np.isnan(m))
         self.assertEqual(bad, 2)
+
+
+class SmallRunTest(SummaryTest):
+    """the same numbers from a run at the quick preset's counts: every judged claim is too small to judge, and
+    says which count is short"""
+    config = QUICK
+
+    def test_claims_follow_the_numbers_and_missing_stages_are_not_measured(self):
+        got = {text: (v, needs) for text, _, v, needs in claims.claims(self.path)}
+        v, needs = next(val for k, val in got.items() if k.startswith("Trained collectives of all four kinds"))
+        self.assertEqual(v, "too small to judge")
+        self.assertIn("agents 24 (needs ≥ 50)", needs)
+        self.assertIn("connector replicates 2 (needs ≥ 5)", needs)
+        self.assertNotIn("deployed pairs", needs)  # pairs are large enough
+        self.assertEqual(next(val for k, val in got.items() if k.startswith("Trained agents travel"))[0], "not measured")
 
 
 if __name__ == "__main__":

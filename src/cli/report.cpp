@@ -1,10 +1,14 @@
-// divcoll report RUN.h5: runs postprocess/report.py with Debian's Python (/usr/bin/python3), which has
-// h5py, numpy, matplotlib and scipy; the python3 first on PATH may be a bare interpreter without them.
+// divcoll report RUN.h5 and divcoll movie RUN.h5: run postprocess/report.py and postprocess/movie.py under a
+// Python that has numpy, h5py and matplotlib: $DIVCOLL_PYTHON, else the first python3 on PATH that imports
+// them, else /usr/bin/python3 (Debian's, which jobs/install-deps.sh equips); the one used is printed.
+#include <fcntl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,44 +20,140 @@ namespace divcoll::cli {
 namespace fs = std::filesystem;
 
 namespace {
-// where report.py is: $DIVCOLL_POSTPROCESS, else next to the build folder of this binary, else the source
-// folder this binary was configured from
-fs::path find_report_script() {
+bool executable(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+}
+
+// runs argv quietly (stdin, stdout and stderr to /dev/null); its exit status, or -1 when it could not start
+int run_quietly(const std::vector<std::string>& args) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_RDWR);
+    if (null >= 0) {
+      ::dup2(null, 0);
+      ::dup2(null, 1);
+      ::dup2(null, 2);
+    }
+    std::vector<char*> argv;
+    for (const auto& s : args) argv.push_back(const_cast<char*>(s.c_str()));
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  if (::waitpid(pid, &status, 0) < 0) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool has_modules(const fs::path& python) {
+  return run_quietly({python.string(), "-c", "import numpy, h5py, matplotlib"}) == 0;
+}
+}  // namespace
+
+PythonChoice find_python() {
+  if (const char* env = std::getenv("DIVCOLL_PYTHON"); env && *env) {
+    DIVCOLL_THROW_UNLESS(executable(env), "DIVCOLL_PYTHON=" << env << " is not an executable file");
+    return {env, "from DIVCOLL_PYTHON"};
+  }
+  std::vector<std::string> tried;
+  if (const char* path = std::getenv("PATH")) {
+    std::stringstream ss(path);
+    std::string dir;
+    while (std::getline(ss, dir, ':')) {
+      const fs::path p = fs::path(dir.empty() ? "." : dir) / "python3";
+      if (!executable(p)) continue;
+      if (has_modules(p)) return {p.string(), "the first python3 on PATH that has numpy, h5py and matplotlib"};
+      tried.push_back(p.string());
+    }
+  }
+  const std::string deb = "/usr/bin/python3";
+  DIVCOLL_THROW_UNLESS(executable(deb), "no Python found: set DIVCOLL_PYTHON, or install Debian's python3-h5py "
+                                        "python3-numpy python3-matplotlib python3-scipy (jobs/install-deps.sh does)");
+  std::string why = "Debian's; no python3 on PATH";
+  if (!tried.empty()) {
+    why += " has numpy, h5py and matplotlib (tried";
+    for (const auto& t : tried) why += " " + t;
+    why += ")";
+  }
+  return {deb, why};
+}
+
+// where a postprocess script is: $DIVCOLL_POSTPROCESS, else next to the build folder of this binary, else the
+// source folder this binary was configured from
+std::string find_postprocess_script(const std::string& name) {
   std::vector<fs::path> candidates;
-  if (const char* env = std::getenv("DIVCOLL_POSTPROCESS")) candidates.emplace_back(fs::path(env) / "report.py");
+  if (const char* env = std::getenv("DIVCOLL_POSTPROCESS")) candidates.emplace_back(fs::path(env) / name);
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (!ec)
     for (fs::path p = self.parent_path(); !p.empty() && p != p.root_path(); p = p.parent_path())
-      candidates.push_back(p / "postprocess" / "report.py");
-  candidates.emplace_back(fs::path(DIVCOLL_SOURCE_DIR) / "postprocess" / "report.py");
+      candidates.push_back(p / "postprocess" / name);
+  candidates.emplace_back(fs::path(DIVCOLL_SOURCE_DIR) / "postprocess" / name);
   for (const fs::path& c : candidates)
-    if (fs::is_regular_file(c, ec)) return c;
-  throw InputError(msg() << "cannot find postprocess/report.py (looked next to this binary and in "
+    if (fs::is_regular_file(c, ec)) return c.string();
+  throw InputError(msg() << "cannot find postprocess/" << name << " (looked next to this binary and in "
                          << DIVCOLL_SOURCE_DIR << "); set DIVCOLL_POSTPROCESS to the postprocess folder");
 }
-}  // namespace
 
-int report(const ReportArgs& a) {
-  fs::path script = find_report_script();
-  // a study folder (divcoll study --out DIR) gets the robustness page, by default in DIR/robustness
-  const bool study = fs::is_directory(a.run);
-  if (study) script = script.parent_path() / "robustness.py";
-  const std::string out = study && a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
-  const char* python = "/usr/bin/python3";
-  DIVCOLL_THROW_UNLESS(::access(python, X_OK) == 0,
-                       python << " is missing: install Debian's python3-h5py python3-numpy python3-matplotlib "
-                                 "python3-scipy (jobs/install-deps.sh does)");
+std::vector<std::string> python_command(const std::string& script, const std::vector<std::string>& args,
+                                        bool announce) {
+  const PythonChoice py = find_python();
+  if (announce) std::printf("divcoll: Python %s (%s)\n", py.path.c_str(), py.why.c_str());
+  std::vector<std::string> cmd = {py.path, find_postprocess_script(script)};
+  cmd.insert(cmd.end(), args.begin(), args.end());
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  std::vector<std::string> args = {python, script.string(), a.run, "--out", out};
-  if (!ec) args.insert(args.end(), {"--divcoll", self.string()});
+  if (!ec) cmd.insert(cmd.end(), {"--divcoll", self.string()});
+  return cmd;
+}
+
+int exec_python(const std::string& script, const std::vector<std::string>& args) {
+  std::vector<std::string> cmd = python_command(script, args, true);
   std::vector<char*> argv;
-  for (auto& s : args) argv.push_back(s.data());
+  for (auto& s : cmd) argv.push_back(s.data());
   argv.push_back(nullptr);
   std::fflush(stdout);
-  ::execv(python, argv.data());
-  throw InputError(msg() << "could not start " << python << " " << script.string());
+  ::execv(argv[0], argv.data());
+  throw InputError(msg() << "could not start " << cmd[0] << " " << cmd[1]);
+}
+
+int run_python(const std::string& script, const std::vector<std::string>& args) {
+  std::vector<std::string> cmd = python_command(script, args, true);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (auto& s : cmd) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  if (::waitpid(pid, &status, 0) < 0) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+int report(const ReportArgs& a) {
+  // a study folder (divcoll study --out DIR) gets the robustness page, by default in DIR/robustness
+  if (fs::is_directory(a.run)) {
+    const std::string out = a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
+    return exec_python("robustness.py", {a.run, "--out", out});
+  }
+  std::vector<std::string> args = {a.run, "--out", a.out};
+  if (a.movie) args.push_back("--movie");
+  return exec_python("report.py", args);
+}
+
+int movie(const MovieArgs& a) {
+  std::vector<std::string> args = {a.run, "--out", a.out};
+  if (a.quick) args.push_back("--quick");
+  return exec_python("movie.py", args);
 }
 
 }  // namespace divcoll::cli

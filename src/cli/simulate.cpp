@@ -1,4 +1,6 @@
 // divcoll simulate, scene, demo, envs
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -6,10 +8,13 @@
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "common/check.hpp"
+#include "io/config.hpp"
 #include "io/environments.hpp"
+#include "io/h5.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "morph/body.hpp"
+#include "mpi/protocol.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll::cli {
@@ -97,30 +102,138 @@ int scene(const SceneArgs& a) {
   return 0;
 }
 
+namespace {
+// a trajectory file of a simulated scene
+void write_traj(const std::string& path, const sim::Scene& scene, const sim::RunResult& r, int steps) {
+  io::Trajectory t;
+  t.steps = steps;
+  t.n_masses = scene.n_masses();
+  t.n_agents = scene.n_agents();
+  t.x = r.x;
+  t.v = r.v;
+  t.touch = r.touch;
+  t.travel = r.travel;
+  t.status = sim::status_name(r.status);
+  io::write_trajectory(path, t, /*overwrite=*/true);
+}
+
+// the pair of the run's weak diverse-trained connector (replicate 0) whose travel on flat is the median of
+// the ok pairs: a typical pair, not the best one
+int median_pair(const std::string& run, int* n_ok, double* median_bl) {
+  io::h5::quiet_errors();
+  const io::h5::File f = io::h5::File::open(run);
+  DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
+                       run << " is not a divcoll run file");
+  DIVCOLL_THROW_UNLESS(f.has("deploy/collectives/travel_bl") && f.group("deploy").read_string("status") == "complete",
+                       run << " has no complete deploy stage (the demo needs trained agents and connectors)");
+  const auto envs = mpi::split(f.group("deploy").read_string("environments"));
+  const auto types = mpi::split(f.group("deploy").read_string("types"));
+  int e = -1, t = -1;
+  for (size_t i = 0; i < envs.size(); ++i)
+    if (envs[i] == "flat") e = static_cast<int>(i);
+  for (size_t i = 0; i < types.size(); ++i)
+    if (types[i] == "weak_diverse@diverse") t = static_cast<int>(i);
+  DIVCOLL_THROW_UNLESS(e >= 0 && t >= 0, run << " has no weak_diverse@diverse deployment on flat");
+  io::h5::Dims d;
+  const std::vector<double> bl = f.read<double>("deploy/collectives/travel_bl", &d);
+  const std::vector<uint8_t> st = f.read<uint8_t>("deploy/collectives/status");
+  const size_t base = ((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3];
+  std::vector<std::pair<double, int>> ok;
+  for (size_t q = 0; q < d[3]; ++q)
+    if (st[base + q] == 0) ok.emplace_back(bl[base + q], static_cast<int>(q));
+  DIVCOLL_THROW_UNLESS(!ok.empty(), run << ": no weak_diverse@diverse pair of replicate 0 ended ok on flat");
+  std::sort(ok.begin(), ok.end());
+  *n_ok = static_cast<int>(ok.size());
+  *median_bl = ok[(ok.size() - 1) / 2].first;
+  return ok[(ok.size() - 1) / 2].second;
+}
+}  // namespace
+
 int demo(const DemoArgs& a) {
   namespace fs = std::filesystem;
-  fs::create_directories(a.out);
   io::environment_table(a.env);
-  Rng rng(seed_for(a.seed, 0, 0));
-  collective::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
-  P.anchors = collective::compute_anchors(P);
-  A.anchors = collective::compute_anchors(A);
-  const std::vector<double> conn = morph::init_connector_params(rng);
-  std::printf("demo: two random agents (untrained until the agents stage lands) joined by a weak connector\n");
-  std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
-  for (const std::string& env : {std::string("flat"), a.env}) {
-    const sim::Scene s = collective::pair_scene(P, A, conn, collective::kWeakConnector, env);
-    const std::string path = (fs::path(a.out) / ("pair_" + env + ".h5")).string();
-    io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
-    sim::RunOptions opt;
-    opt.steps = a.steps;
-    const sim::RunResult r = sim::simulate(s, opt);
-    std::printf("%-12s %10.4f %10.4f %10s  %s\n", env.c_str(), r.travel, r.travel / sim::mean_body_length(s),
-                sim::status_name(r.status), path.c_str());
+  fs::create_directories(a.out);
+  std::vector<std::pair<std::string, std::string>> episodes;  // scene, trajectory
+  if (!a.run.empty()) {
+    int n_ok = 0;
+    double med = 0;
+    const int q = median_pair(a.run, &n_ok, &med);
+    std::printf("demo: the trained agents of %s joined by its weak diverse-trained connector (replicate 0); pair %d "
+                "is the median of its %d ok pairs on flat (%.2f BL)\n",
+                a.run.c_str(), q, n_ok, med);
+    std::vector<std::string> rows;
+    for (const std::string& env : {std::string("flat"), a.env}) {
+      ExportArgs ex;
+      ex.run = a.run;
+      ex.env = env;
+      ex.pair = q;
+      ex.force = true;  // the demo folder is scratch: rerunning replaces it
+      ex.out = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
+      const int rc = export_scene(ex);  // prints what the run file records for the episode
+      DIVCOLL_THROW_UNLESS(rc == 0, "divcoll export failed for " << env);
+      const io::h5::File f = io::h5::File::open(a.run);
+      const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
+      const auto envs = mpi::split(f.group("deploy").read_string("environments"));
+      const auto types = mpi::split(f.group("deploy").read_string("types"));
+      const int e = static_cast<int>(std::find(envs.begin(), envs.end(), env) - envs.begin());
+      const int t = static_cast<int>(std::find(types.begin(), types.end(), "weak_diverse@diverse") - types.begin());
+      DIVCOLL_THROW_UNLESS(e < static_cast<int>(envs.size()), a.run << " has no deployment in " << env);
+      io::h5::Dims d;
+      const std::vector<double> bl = f.read<double>("deploy/collectives/travel_bl", &d);
+      const double stored = bl[((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q];
+      const sim::Scene s = io::read_scene(ex.out);
+      sim::RunOptions opt;
+      opt.steps = cfg.deploy.episode_steps;
+      opt.record = true;
+      const sim::RunResult r = sim::simulate(s, opt);
+      const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
+      write_traj(traj, s, r, opt.steps);
+      const double got = r.travel / sim::mean_body_length(s);
+      char row[512];
+      std::snprintf(row, sizeof row, "%-12s %10.4f %10.4f %10s %16.4f  %s%s\n", env.c_str(), r.travel, got,
+                    sim::status_name(r.status), stored, traj.c_str(),
+                    (std::isnan(stored) && std::isnan(got)) || stored == got ? "" : "  (differs from the run file!)");
+      rows.push_back(row);
+      episodes.emplace_back(ex.out, traj);
+    }
+    std::printf("%-12s %10s %10s %10s %16s  %s\n", "environment", "travel_u", "travel_BL", "status", "run file (BL)",
+                "trajectory file");
+    for (const auto& row : rows) std::printf("%s", row.c_str());
+  } else {
+    Rng rng(seed_for(a.seed, 0, 0));
+    collective::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
+    P.anchors = collective::compute_anchors(P);
+    A.anchors = collective::compute_anchors(A);
+    const std::vector<double> conn = morph::init_connector_params(rng);
+    std::printf("demo: two random, untrained agents joined by an untrained weak connector (they barely move; "
+                "pass --run RUN.h5 for a run's trained ones)\n");
+    std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
+    for (const std::string& env : {std::string("flat"), a.env}) {
+      const sim::Scene s = collective::pair_scene(P, A, conn, collective::kWeakConnector, env);
+      const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
+      io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
+      sim::RunOptions opt;
+      opt.steps = a.steps;
+      opt.record = true;
+      const sim::RunResult r = sim::simulate(s, opt);
+      const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
+      write_traj(traj, s, r, opt.steps);
+      std::printf("%-12s %10.4f %10.4f %10s  %s\n", env.c_str(), r.travel, r.travel / sim::mean_body_length(s),
+                  sim::status_name(r.status), path.c_str());
+      episodes.emplace_back(path, traj);
+    }
   }
-  std::printf("simulate a scene file yourself: build/divcoll simulate --scene %s/pair_flat.h5 --steps 1000 "
-              "--out %s/traj_flat.h5 --grad --force\n",
-              a.out.c_str(), a.out.c_str());
+  if (a.movie) {
+    std::vector<std::string> args = {"--episode"};
+    for (const auto& [sc, tr] : episodes) args.insert(args.end(), {sc, tr});
+    const std::string mp4 = (fs::path(a.out) / "demo.mp4").string();
+    args.insert(args.end(), {"--out", mp4});
+    const int rc = run_python("movie.py", args);
+    DIVCOLL_THROW_UNLESS(rc == 0, "rendering " << mp4 << " failed (postprocess/movie.py exit " << rc << ")");
+  } else {
+    std::printf("watch them: build/divcoll demo%s%s --out %s --movie (MP4 with ffmpeg)\n", a.run.empty() ? "" : " --run ",
+                a.run.c_str(), a.out.c_str());
+  }
   return 0;
 }
 
