@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Scaling benchmark (prints; it is not a test): wall time per stage of one preset at 1, 2, 3, 4 ranks,
-# each rank's busy share, and the load imbalance, from the run files' attributes. Ranks beyond the
+# each rank's busy share, and the load imbalance, from the run files' attributes. The machine's load
+# average is printed before each run: on a shared machine the wall times, not the busy shares, suffer. Ranks beyond the
 # machine's cores are oversubscribed (said so in the table). Writes OUT/scaling.csv, OUT/scaling.md and
 # OUT/scaling.png (postprocess/fig_scaling.py).
 #   bash jobs/bench-scaling.sh [CONFIG=configs/quick.toml] [OUT=out/scaling] [RANKS="1 2 3 4"]
@@ -14,7 +15,7 @@ source jobs/mpi-env.sh
 mkdir -p "$OUT"
 cores=$(nproc)
 for n in $RANKS; do
-  echo "== $n rank(s)"
+  echo "== $n rank(s); load average $(cut -d' ' -f1-3 /proc/loadavg)"
   t0=$(date +%s.%N)
   mpirun -np "$n" build/divcoll run "$CONFIG" run.progress_every_s=0 --out "$OUT/run_np$n.h5" --force \
     | grep -E "^stage" || true

@@ -13,7 +13,8 @@ BUILD_RUNTIME=(
   libeigen3-dev libboost-serialization-dev
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
-  python3-h5py python3-numpy python3-matplotlib python3-scipy
+  python3-h5py python3-numpy python3-matplotlib python3-scipy python3-xarray
+  python3-pip python3-venv python3-setuptools
   ffmpeg
 )
 TEST_ONLY=(

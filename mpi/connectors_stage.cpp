@@ -153,35 +153,39 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
       if (rank == 0)
         for (const auto& [a, b] : batch) items.push_back(pack(PairTask{c, a, b}));
     }
-    const FarmResult fr = farm(comm, items, compute);
-
-    // the master sums each slot's gradients in pair order and steps
+    // the master sums each slot's gradients in pair order as the results come in (in item order, so the
+    // sums are the same whatever the rank count), while the round runs
     std::vector<double> curve_u(N, std::numeric_limits<double>::quiet_NaN()), curve_bl = curve_u, nan_pairs(N, 0);
+    std::vector<std::vector<double>> g(rank == 0 ? N : 0, std::vector<double>(Pc, 0.0));
+    std::vector<double> su(N, 0.0), sb(N, 0.0);
+    std::vector<int> ok(N, 0);
+    FarmOptions fo;
+    fo.on_result = [&](int64_t i, const std::string& bytes) {
+      const int c = static_cast<int>(i / B);
+      const PairDone d = unpack<PairDone>(bytes);
+      if (d.status != 0 || !std::isfinite(d.travel_u)) {
+        ++nan_pairs[c];
+        return;
+      }
+      ++ok[c];
+      su[c] += d.travel_u;
+      sb[c] += d.travel_bl;
+      for (int q = 0; q < Pc; ++q) g[c][q] += d.grad[q];
+    };
+    farm(comm, items, compute, fo);
+
+    // and steps
     if (rank == 0) {
       for (int c = 0; c < N; ++c) {
-        std::vector<double> g(Pc, 0.0);
-        double su = 0, sb = 0;
-        int ok = 0;
-        for (int p = 0; p < B; ++p) {
-          const PairDone d = unpack<PairDone>(fr.results[static_cast<size_t>(c) * B + p]);
-          if (d.status != 0 || !std::isfinite(d.travel_u)) {
-            ++nan_pairs[c];
-            continue;
-          }
-          ++ok;
-          su += d.travel_u;
-          sb += d.travel_bl;
-          for (int q = 0; q < Pc; ++q) g[q] += d.grad[q];
-        }
-        if (ok == 0) continue;
-        curve_u[c] = su / ok;
-        curve_bl[c] = sb / ok;
+        if (ok[c] == 0) continue;
+        curve_u[c] = su[c] / ok[c];
+        curve_bl[c] = sb[c] / ok[c];
         // loss = −mean travel
-        for (double& x : g) x = -x / ok;
+        for (double& x : g[c]) x = -x / ok[c];
         if (C.optimizer == "adam")
-          adam[c].step(params[c], g, C.lr, C.clip_norm, it + 1);
+          adam[c].step(params[c], g[c], C.lr, C.clip_norm, it + 1);
         else
-          collective::normalized_step(params[c], g, C.lr);
+          collective::normalized_step(params[c], g[c], C.lr);
       }
     }
     // curves: row `it` of each group's (I × columns) datasets

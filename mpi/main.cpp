@@ -7,6 +7,7 @@
 #include "cli/commands.hpp"
 #include "common/check.hpp"
 #include "io/config.hpp"
+#include "mpi/bench_farm.hpp"
 #include "mpi/run_cmd.hpp"
 #include "mpi/study_cmd.hpp"
 
@@ -77,8 +78,27 @@ int main(int argc, char** argv) {
   b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
   b->add_flag("--quick", bench.quick, "fewer rows");
 
+  mpi::BenchFarmArgs bf;
+  auto* bfc = app.add_subcommand("bench-farm", "the task farm's master alone: cost per item at any rank count (MPI)");
+  bfc->add_option("--item-ms", bf.item_ms, "cost of one synthetic item, ms (a sleep)")->check(CLI::Range(0.0, 60000.0));
+  bfc->add_option("--result-bytes", bf.result_bytes, "bytes of one result")->check(CLI::Range(0, 1 << 28));
+  bfc->add_option("--task-bytes", bf.task_bytes, "bytes of one task")->check(CLI::Range(0, 1 << 28));
+  bfc->add_option("--items", bf.items, "items per round")->check(CLI::Range(0, 100000000));
+  bfc->add_option("--rounds", bf.rounds, "rounds measured (after one warm-up round)")->check(CLI::Range(1, 100000));
+  bfc->add_option("--block", bf.block, "items per task message (0: guided)")->check(CLI::Range(0, 1000000));
+  bfc->add_option("--max-block", bf.max_block, "largest guided block")->check(CLI::Range(1, 1000000));
+  bfc->add_option("--depth", bf.depth, "blocks a worker holds at once")->check(CLI::Range(1, 64));
+  bfc->add_option("--fold", bf.fold, "master folds results: none, after the round, during it")
+      ->check(CLI::IsMember({"none", "after", "during"}));
+  bfc->add_flag("--master-works", bf.master_works, "the master computes items too");
+
   auto* e = app.add_subcommand("envs", "list the built-in environments");
   auto* keys = app.add_subcommand("keys", "every config key with its type, default, allowed range, unit and meaning (markdown)");
+
+  std::string schema_check;
+  auto* sch = app.add_subcommand("schema", "every group and dataset of a run file: type, axes, unit, meaning (markdown)");
+  sch->add_option("--check", schema_check, "instead, list where this run file differs from the schema (exit 1 if it does)")
+      ->check(CLI::ExistingFile);
 
   std::string cmp_a, cmp_b;
   auto* cmpc = app.add_subcommand("compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)");
@@ -144,10 +164,12 @@ int main(int argc, char** argv) {
     if (*b) return cli::bench(bench);
     if (*e) return cli::envs();
     if (*keys) return std::printf("%s", io::schema_markdown().c_str()) < 0;
+    if (*sch) return cli::schema(schema_check);
     if (*g) return cli::gd_compare(gdc);
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*v) return mpi::run_main(argc, argv, evo);
     if (*r) return mpi::run_main(argc, argv, run);
+    if (*bfc) return mpi::bench_farm_main(argc, argv, bf);
     if (*st) return mpi::study_main(argc, argv, study);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());

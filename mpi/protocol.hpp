@@ -1,13 +1,14 @@
 // the master/worker protocol: message tags and the Boost.Serialization of every payload.
 //
-//   worker → master   kReady                 (empty)       "give me an item"
-//   master → worker   kTask     [index | serialized task]  an item to compute
-//   worker → master   kResult   [index | serialized result] the answer, and a request for the next item
-//   master → worker   kRoundEnd                (empty)       no more items in this round
+//   master → worker   kTask     [first | count | count sizes | count serialized tasks]   a block of items
+//   worker → master   kResult   [first | count | count sizes | count serialized results] the block's results
+//   master → worker   kRoundEnd (empty)                                                   no more items
 //
-// A round is collective: every rank enters farm() (mpi/scheduler.hpp) with the same item count; it ends
-// when every item has a result on the master and every worker has been told kRoundEnd. Payloads are
-// binary archives of plain data (collective::Agent, evo::TrainResult, ...) defined below.
+// A round is collective: every rank enters farm() (mpi/scheduler.hpp) with the same item count. The master
+// pushes each worker FarmOptions::depth blocks at once and answers every result with the next block, or,
+// once the items are out, with kRoundEnd (once per worker; messages from the master arrive in the order it
+// sent them, so no task follows it). The round ends when every item has a result on the master. Payloads
+// are binary archives of plain data (collective::Agent, evo::TrainResult, ...) defined below.
 #pragma once
 
 #include <boost/archive/binary_iarchive.hpp>
@@ -26,7 +27,7 @@
 
 namespace divcoll::mpi {
 
-enum Tag : int { kReady = 1, kTask = 2, kResult = 3, kRoundEnd = 4 };
+enum Tag : int { kTask = 2, kResult = 3, kRoundEnd = 4 };
 
 template <class T>
 std::string pack(const T& v) {

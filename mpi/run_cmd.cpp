@@ -34,7 +34,11 @@ std::string now_iso() {
 
 // MPI for the lifetime of a command (work happens in an inner scope, so files close before Finalize)
 struct MpiSession {
-  MpiSession(int argc, char** argv) { MPI_Init(&argc, &argv); }
+  // FUNNELED: the task farm computes items in a thread of its own; only the calling thread uses MPI
+  MpiSession(int argc, char** argv) {
+    int provided = 0;
+    MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  }
   ~MpiSession() { MPI_Finalize(); }
 };
 

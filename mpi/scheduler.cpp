@@ -1,75 +1,496 @@
 #include "mpi/scheduler.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <cstdlib>
 #include <cstring>
+#include <ctime>
+#include <deque>
+#include <exception>
 #include <iterator>
-#include <list>
+#include <memory>
+#include <mutex>
+#include <thread>
 
 #include "mpi/protocol.hpp"
 
 namespace divcoll::mpi {
 namespace {
 
-void send_bytes(MPI_Comm comm, int dest, int tag, int64_t index, const std::string& bytes) {
-  std::string buf(sizeof(int64_t) + bytes.size(), '\0');
-  std::memcpy(buf.data(), &index, sizeof index);
-  std::memcpy(buf.data() + sizeof index, bytes.data(), bytes.size());
-  MPI_Send(buf.data(), static_cast<int>(buf.size()), MPI_BYTE, dest, tag, comm);
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// receives a message already probed: (index, payload)
-std::pair<int64_t, std::string> recv_bytes(MPI_Comm comm, const MPI_Status& st) {
-  int count = 0;
-  MPI_Get_count(&st, MPI_BYTE, &count);
-  std::string buf(count, '\0');
-  MPI_Recv(buf.data(), count, MPI_BYTE, st.MPI_SOURCE, st.MPI_TAG, comm, MPI_STATUS_IGNORE);
-  int64_t index = -1;
-  if (count >= static_cast<int>(sizeof index)) std::memcpy(&index, buf.data(), sizeof index);
-  return {index, count >= static_cast<int>(sizeof index) ? buf.substr(sizeof index) : std::string()};
+// how long a thread with nothing to do sleeps before it looks again: 20 µs after something happened,
+// doubling up to 2 ms, so a waiting rank costs its core under 1% and answers within 2 ms (a worker is
+// woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work)
+class Backoff {
+ public:
+  void reset() { us_ = kMinUs; }
+  std::chrono::microseconds next() {
+    const int us = us_;
+    us_ = std::min(2 * us_, kMaxUs);
+    return std::chrono::microseconds(us);
+  }
+  void sleep() { std::this_thread::sleep_for(next()); }
+
+ private:
+  static constexpr int kMinUs = 20, kMaxUs = 2000;
+  int us_ = kMinUs;
+};
+
+// waits for a non-blocking MPI request without spinning on the core
+void wait_sleeping(MPI_Request& req) {
+  Backoff b;
+  for (int done = 0;;) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    b.sleep();
+  }
 }
 
-// requests each worker keeps open: with 2 a worker has its next item queued when it sends a result, so it
-// does not wait for the master to finish an item of its own before it gets more work (with 1 a worker was
-// busy only about 35% of the time at 2 ranks on small items)
-constexpr int kPrefetch = 2;
+// a block message (tasks or results): [first | count | count sizes | payloads], all int64
+std::string pack_block(int64_t first, const std::string* payloads, int64_t count) {
+  size_t total = (2 + count) * sizeof(int64_t);
+  for (int64_t k = 0; k < count; ++k) total += payloads[k].size();
+  std::string buf(total, '\0');
+  char* p = buf.data();
+  auto put = [&](int64_t v) {
+    std::memcpy(p, &v, sizeof v);
+    p += sizeof v;
+  };
+  put(first);
+  put(count);
+  for (int64_t k = 0; k < count; ++k) put(static_cast<int64_t>(payloads[k].size()));
+  for (int64_t k = 0; k < count; ++k) {
+    std::memcpy(p, payloads[k].data(), payloads[k].size());
+    p += payloads[k].size();
+  }
+  return buf;
+}
 
-// the master's non-blocking task sends, whose buffers live until they complete: a queued task for a busy
-// worker must not hold the master up (a large task is only taken when the worker posts its receive)
+// the first index of a block message and its payloads
+std::pair<int64_t, std::vector<std::string>> unpack_block(const char* buf) {
+  auto get = [&](size_t at) {
+    int64_t v = 0;
+    std::memcpy(&v, buf + at * sizeof v, sizeof v);
+    return v;
+  };
+  const int64_t first = get(0), count = get(1);
+  std::vector<std::string> out(count);
+  size_t at = (2 + count) * sizeof(int64_t);
+  for (int64_t k = 0; k < count; ++k) {
+    const auto len = static_cast<size_t>(get(2 + k));
+    out[k].assign(buf + at, len);
+    at += len;
+  }
+  return {first, std::move(out)};
+}
+
+// requests in flight with the buffers they use: one MPI_Testsome looks at all of them
+template <class Buffer>
+class InFlight {
+ public:
+  ~InFlight() {
+    if (!reqs_.empty()) new std::vector<Buffer>(std::move(bufs_));  // error path: the buffers are left to MPI
+  }
+  Buffer& add(MPI_Request*& req) {
+    reqs_.push_back(MPI_REQUEST_NULL);
+    bufs_.push_back(std::make_unique<typename Buffer::element_type>());
+    req = &reqs_.back();
+    return bufs_.back();
+  }
+  // the buffers of the requests that have completed, in the order they were added
+  std::vector<Buffer> take() {
+    std::vector<Buffer> out;
+    if (reqs_.empty()) return out;
+    int k = 0;
+    idx_.resize(reqs_.size());
+    MPI_Testsome(static_cast<int>(reqs_.size()), reqs_.data(), &k, idx_.data(), MPI_STATUSES_IGNORE);
+    if (k <= 0) return out;  // none, or MPI_UNDEFINED (every request is null)
+    std::sort(idx_.begin(), idx_.begin() + k);
+    size_t keep = 0;
+    for (size_t i = 0, d = 0; i < reqs_.size(); ++i) {
+      if (d < static_cast<size_t>(k) && idx_[d] == static_cast<int>(i)) {
+        out.push_back(std::move(bufs_[i]));
+        ++d;
+      } else {
+        reqs_[keep] = reqs_[i];
+        bufs_[keep] = std::move(bufs_[i]);
+        ++keep;
+      }
+    }
+    reqs_.resize(keep);
+    bufs_.resize(keep);
+    return out;
+  }
+  bool empty() const { return reqs_.empty(); }
+
+ private:
+  std::vector<MPI_Request> reqs_;  // MPI writes into these: a request moves only while it is not being tested
+  std::vector<Buffer> bufs_;       // heap blocks: they do not move when the vector grows
+  std::vector<int> idx_;
+};
+
+// a message as received: where it came from, its tag, its bytes (not zeroed first)
+struct Message {
+  int source = 0, tag = 0;
+  size_t size = 0;
+  std::unique_ptr<char[]> bytes;
+};
+
+// non-blocking receives of messages already matched by MPI_Improbe: neither side waits in MPI while the
+// other is busy (a large message needs both sides to call MPI when the shared-memory transport has no
+// single-copy mechanism)
+class Receiver {
+ public:
+  void receive(MPI_Message& msg, const MPI_Status& st) {
+    int count = 0;
+    MPI_Get_count(&st, MPI_BYTE, &count);
+    MPI_Request* req = nullptr;
+    Message& m = *inflight_.add(req);
+    m = {st.MPI_SOURCE, st.MPI_TAG, static_cast<size_t>(count), std::unique_ptr<char[]>(new char[std::max(count, 1)])};
+    MPI_Imrecv(m.bytes.get(), count, MPI_BYTE, &msg, req);
+  }
+  std::vector<std::unique_ptr<Message>> take() { return inflight_.take(); }
+  bool empty() const { return inflight_.empty(); }
+
+ private:
+  InFlight<std::unique_ptr<Message>> inflight_;
+};
+
+// non-blocking sends whose buffers live until they complete
 class Sender {
  public:
   explicit Sender(MPI_Comm comm) : comm_(comm) {}
-  ~Sender() { wait_all(); }
-  void send(int dest, int tag, int64_t index, const std::string& bytes) {
-    reap();
-    Pending& p = pending_.emplace_back();
-    p.buf.resize(sizeof(int64_t) + bytes.size());
-    std::memcpy(p.buf.data(), &index, sizeof index);
-    std::memcpy(p.buf.data() + sizeof index, bytes.data(), bytes.size());
-    MPI_Isend(p.buf.data(), static_cast<int>(p.buf.size()), MPI_BYTE, dest, tag, comm_, &p.req);
+  void send(int dest, int tag, std::string bytes) {
+    MPI_Request* req = nullptr;
+    std::string& buf = *inflight_.add(req);
+    buf = std::move(bytes);
+    MPI_Isend(buf.data(), static_cast<int>(buf.size()), MPI_BYTE, dest, tag, comm_, req);
   }
+  // frees the buffers of the sends that have completed (and lets MPI progress the others)
+  void reap() { inflight_.take(); }
   void wait_all() {
-    for (Pending& p : pending_) MPI_Wait(&p.req, MPI_STATUS_IGNORE);
-    pending_.clear();
+    for (Backoff b; reap(), !inflight_.empty();) b.sleep();
   }
 
  private:
-  struct Pending {
-    MPI_Request req = MPI_REQUEST_NULL;
-    std::string buf;
-  };
-  void reap() {  // frees the buffers of the sends that have completed
-    for (auto it = pending_.begin(); it != pending_.end();) {
-      int done = 0;
-      MPI_Test(&it->req, &done, MPI_STATUS_IGNORE);
-      it = done ? pending_.erase(it) : std::next(it);
-    }
-  }
   MPI_Comm comm_;
-  std::list<Pending> pending_;  // a list: buffers must not move while their send is in flight
+  InFlight<std::unique_ptr<std::string>> inflight_;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+// does the master's node have a core for every rank on it? (Open MPI and MPICH say how many ranks share
+// the node; without either, every rank is assumed to be on the master's node)
+bool node_has_core_per_rank(int size) {
+  int local = size;
+  for (const char* var : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"})
+    if (const char* v = std::getenv(var)) {
+      local = std::atoi(v);
+      break;
+    }
+  const unsigned cores = std::thread::hardware_concurrency();
+  return cores == 0 || local <= static_cast<int>(cores);
+}
+
+// the thread that computes items on one rank, and what it shares with the serving thread
+struct Shared {
+  std::mutex mu;
+  std::condition_variable to_server;  // something finished (or failed)
+  std::condition_variable to_worker;  // a block was queued (or the round is over)
+  std::exception_ptr error;
+  double compute_s = 0;
+  long items = 0;
+};
+
+// records one compute() call's time
+std::string timed_compute(const std::function<std::string(const std::string&)>& compute, const std::string& task,
+                          double& seconds) {
+  const auto t0 = Clock::now();
+  std::string r = compute(task);
+  seconds += seconds_since(t0);
+  return r;
+}
+
+void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::string>& items,
+                  const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt,
+                  FarmResult& out, FarmClock& clock) {
+  const bool master_computes = opt.master_works && node_has_core_per_rank(size);
+  const int computing = size - 1 + (master_computes ? 1 : 0);
+  Shared sh;
+  int64_t next = 0;                  // first item not yet handed out (guarded by sh.mu)
+  std::vector<char> have(n, 0);      // item has its result on the master (guarded by sh.mu)
+  int64_t local_new = 0;             // items the master's thread finished since the server last looked
+  bool local_running = false;
+
+  // hands worker w its next block, or tells it the round is over (once)
+  Sender sender(comm);
+  std::vector<char> ended(size, 0);
+  int open_workers = size - 1;
+  auto give = [&](int w) {
+    const auto t0 = Clock::now();
+    int64_t first = 0, count = 0;
+    {
+      std::lock_guard lk(sh.mu);
+      const int64_t left = n - next;
+      if (left > 0) {
+        const int64_t guided = (left + 4 * computing - 1) / (4 * computing);
+        count = std::min(left, opt.block > 0 ? int64_t{opt.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt.max_block)));
+        first = next;
+        next += count;
+      }
+    }
+    if (count > 0) {
+      std::fill(out.owner.begin() + first, out.owner.begin() + first + count, w);
+      std::string buf = pack_block(first, items.data() + first, count);
+      clock.task_bytes += static_cast<double>(buf.size());
+      ++clock.task_msgs;
+      sender.send(w, kTask, std::move(buf));
+    } else if (!ended[w]) {
+      ended[w] = 1;
+      --open_workers;
+      sender.send(w, kRoundEnd, std::string());
+    }
+    clock.task_s += seconds_since(t0);
+  };
+  for (int k = 0; k < std::max(1, opt.depth); ++k)
+    for (int w = 1; w < size; ++w) give(w);
+
+  // the master's own items, one at a time, from the same queue
+  std::thread local;
+  if (master_computes && n > 0) {
+    local_running = true;
+    local = std::thread([&] {
+      double secs = 0;
+      long count = 0;
+      std::unique_lock lk(sh.mu);
+      while (next < n && !sh.error) {
+        const int64_t i = next++;
+        out.owner[i] = 0;
+        lk.unlock();
+        std::string r;
+        try {
+          r = timed_compute(compute, items[i], secs);
+        } catch (...) {
+          lk.lock();
+          sh.error = std::current_exception();
+          break;
+        }
+        lk.lock();
+        out.results[i] = std::move(r);
+        have[i] = 1;
+        ++local_new, ++count;
+        sh.to_server.notify_one();
+      }
+      sh.compute_s += secs;
+      sh.items += count;
+      local_running = false;
+      sh.to_server.notify_one();
+    });
+  }
+
+  // if serving fails (an exception from MPI, progress or on_result), the thread stops after its item
+  struct Joiner {
+    std::thread& t;
+    Shared& sh;
+    int64_t& next;
+    int64_t n;
+    ~Joiner() {
+      if (!t.joinable()) return;
+      {
+        std::lock_guard lk(sh.mu);
+        next = n;
+      }
+      t.join();
+    }
+  } joiner{local, sh, next, n};
+  int64_t done = 0, folded = 0;
+  auto finished = [&](int64_t k) {
+    for (int64_t q = 0; q < k; ++q) {
+      ++done;
+      if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
+    }
+  };
+  Receiver receiver;
+  Backoff backoff;
+  for (;;) {
+    bool active = false;
+    // every result that has arrived is answered at once with the worker's next block
+    for (;;) {
+      int flag = 0;
+      MPI_Message msg;
+      MPI_Status st;
+      MPI_Improbe(MPI_ANY_SOURCE, kResult, comm, &flag, &msg, &st);
+      if (!flag) break;
+      active = true;
+      const auto t0 = Clock::now();
+      receiver.receive(msg, st);
+      clock.result_s += seconds_since(t0);
+      give(st.MPI_SOURCE);
+    }
+    for (const auto& m : receiver.take()) {
+      active = true;
+      const auto t0 = Clock::now();
+      auto [first, results] = unpack_block(m->bytes.get());
+      const auto count = static_cast<int64_t>(results.size());
+      for (int64_t k = 0; k < count; ++k) out.results[first + k] = std::move(results[k]);
+      {
+        std::lock_guard lk(sh.mu);
+        std::fill(have.begin() + first, have.begin() + first + count, 1);
+      }
+      clock.result_bytes += static_cast<double>(m->size);
+      ++clock.result_msgs;
+      clock.results += count;
+      clock.result_s += seconds_since(t0);
+      finished(count);
+    }
+    int64_t fresh = 0, fold_to = folded;
+    bool running = false;
+    std::exception_ptr error;
+    {
+      std::lock_guard lk(sh.mu);
+      fresh = local_new;
+      local_new = 0;
+      running = local_running;
+      error = sh.error;
+      if (opt.on_result)
+        while (fold_to < n && have[fold_to]) ++fold_to;
+    }
+    if (error) {
+      if (local.joinable()) local.join();
+      std::rethrow_exception(error);
+    }
+    if (fresh > 0) active = true, finished(fresh);
+    for (; folded < fold_to; ++folded) opt.on_result(folded, out.results[folded]);
+    sender.reap();
+    if (done == n && open_workers == 0 && !running) break;
+    if (active) {
+      backoff.reset();
+    } else {
+      std::unique_lock lk(sh.mu);
+      sh.to_server.wait_for(lk, backoff.next(), [&] { return local_new > 0 || sh.error || (!local_running && running); });
+    }
+  }
+  if (local.joinable()) local.join();
+  sender.wait_all();
+  clock.compute_s += sh.compute_s;
+  clock.items += sh.items;
+}
+
+void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute, FarmResult& out,
+                  FarmClock& clock) {
+  struct Block {
+    int64_t first = 0;
+    std::vector<std::string> data;  // tasks, then their results
+  };
+  Shared sh;
+  std::deque<Block> queued, computed;
+  bool busy = false, stop = false;
+  std::thread worker([&] {
+    double secs = 0;
+    long count = 0;
+    std::unique_lock lk(sh.mu);
+    for (;;) {
+      sh.to_worker.wait(lk, [&] { return stop || !queued.empty(); });
+      if (queued.empty() || sh.error) break;
+      Block b = std::move(queued.front());
+      queued.pop_front();
+      busy = true;
+      lk.unlock();
+      try {
+        for (std::string& x : b.data) x = timed_compute(compute, x, secs), ++count;
+      } catch (...) {
+        lk.lock();
+        sh.error = std::current_exception();
+        busy = false;
+        sh.to_server.notify_one();
+        break;
+      }
+      lk.lock();
+      busy = false;
+      computed.push_back(std::move(b));
+      sh.to_server.notify_one();
+    }
+    sh.compute_s += secs;
+    sh.items += count;
+  });
+  auto finish_thread = [&] {
+    {
+      std::lock_guard lk(sh.mu);
+      stop = true;
+      queued.clear();
+    }
+    sh.to_worker.notify_one();
+    if (worker.joinable()) worker.join();
+  };
+  struct Finally {
+    std::function<void()> f;
+    ~Finally() { f(); }
+  } finally{finish_thread};
+
+  Sender sender(comm);
+  Receiver receiver;
+  bool got_end = false;
+  Backoff backoff;
+  for (;;) {
+    bool active = false;
+    for (;;) {  // tasks (matched in the order the master sent them; nothing follows kRoundEnd)
+      int flag = 0;
+      MPI_Message msg;
+      MPI_Status st;
+      MPI_Improbe(0, MPI_ANY_TAG, comm, &flag, &msg, &st);
+      if (!flag) break;
+      active = true;
+      receiver.receive(msg, st);
+    }
+    for (const auto& m : receiver.take()) {
+      active = true;
+      if (m->tag == kRoundEnd) {
+        got_end = true;
+        continue;
+      }
+      auto [first, tasks] = unpack_block(m->bytes.get());
+      {
+        std::lock_guard lk(sh.mu);
+        queued.push_back(Block{first, std::move(tasks)});
+      }
+      sh.to_worker.notify_one();
+    }
+    std::deque<Block> ready;
+    bool idle = false;
+    std::exception_ptr error;
+    {
+      std::lock_guard lk(sh.mu);
+      ready.swap(computed);
+      idle = queued.empty() && !busy;
+      error = sh.error;
+    }
+    if (error) std::rethrow_exception(error);
+    for (Block& b : ready) {  // results go out at once, without waiting for the master to take them
+      active = true;
+      sender.send(0, kResult, pack_block(b.first, b.data.data(), static_cast<int64_t>(b.data.size())));
+      for (size_t k = 0; k < b.data.size(); ++k) out.results[b.first + k] = std::move(b.data[k]);
+    }
+    sender.reap();
+    if (got_end && idle && ready.empty() && receiver.empty()) break;
+    if (active) {
+      backoff.reset();
+    } else {
+      std::unique_lock lk(sh.mu);
+      sh.to_server.wait_for(lk, backoff.next(), [&] { return !computed.empty() || sh.error; });
+    }
+  }
+  finish_thread();
+  sender.wait_all();
+  clock.compute_s += sh.compute_s;
+  clock.items += sh.items;
 }
 
 }  // namespace
@@ -81,84 +502,41 @@ FarmClock& farm_clock() {
 
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt) {
-  const auto t_farm = std::chrono::steady_clock::now();
+  const auto t_farm = Clock::now();
   FarmClock& clock = farm_clock();
-  auto timed = [&](const std::string& item) {
-    const auto t0 = std::chrono::steady_clock::now();
-    std::string r = compute(item);
-    clock.compute_s += seconds_since(t0);
-    ++clock.items;
-    return r;
-  };
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
+  const double cpu0 = rank == 0 ? thread_cpu_s() : 0.0;
   int64_t n = static_cast<int64_t>(items.size());
-  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
   FarmResult out;
+  if (size == 1) {
+    out.results.resize(n);
+    out.owner.assign(n, 0);
+    for (int64_t i = 0; i < n; ++i) {
+      out.results[i] = timed_compute(compute, items[i], clock.compute_s);
+      ++clock.items;
+      if (opt.progress) opt.progress(static_cast<int>(i + 1), static_cast<int>(n));
+      if (opt.on_result) opt.on_result(i, out.results[i]);
+    }
+    clock.farm_s += seconds_since(t_farm);
+    return out;
+  }
+  {  // workers wait here while the master prepares the round: sleeping, not spinning in MPI_Bcast
+    MPI_Request req;
+    MPI_Ibcast(&n, 1, MPI_INT64_T, 0, comm, &req);
+    wait_sleeping(req);
+  }
   out.results.assign(n, std::string());
   out.owner.assign(n, 0);
-
-  if (rank == 0) {
-    Sender sender(comm);
-    int64_t next = 0, done = 0;
-    int workers_open = kPrefetch * (size - 1);  // requests not yet answered with kRoundEnd
-    auto hand_out = [&](int worker) {
-      if (next < n) {
-        out.owner[next] = worker;
-        sender.send(worker, kTask, next, items[next]);
-        ++next;
-      } else {
-        sender.send(worker, kRoundEnd, -1, std::string());
-        --workers_open;
-      }
-    };
-    auto handle = [&](const MPI_Status& st) {
-      auto [index, payload] = recv_bytes(comm, st);
-      if (st.MPI_TAG == kResult) {
-        out.results[index] = std::move(payload);
-        ++done;
-        if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
-      }
-      hand_out(st.MPI_SOURCE);
-    };
-    while (done < n || workers_open > 0) {
-      MPI_Status st;
-      int flag = 0;
-      MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &flag, &st);
-      if (flag) {
-        handle(st);
-      } else if (next < n && (opt.master_works || size == 1)) {
-        // the master computes an item itself
-        const int64_t i = next++;
-        out.owner[i] = 0;
-        out.results[i] = timed(items[i]);
-        ++done;
-        if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
-      } else {
-        MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &st);
-        handle(st);
-      }
-    }
-    sender.wait_all();
-  } else {
-    // kPrefetch requests up front; every result is a new request. Each request is answered with a task or,
-    // once the items are out, with kRoundEnd; messages from the master arrive in the order it sent them, so
-    // no task follows the first kRoundEnd, and the round ends when every request has been answered.
-    for (int k = 0; k < kPrefetch; ++k) send_bytes(comm, 0, kReady, -1, std::string());
-    for (int ends = 0; ends < kPrefetch;) {
-      MPI_Status st;
-      MPI_Probe(0, MPI_ANY_TAG, comm, &st);
-      auto [index, payload] = recv_bytes(comm, st);
-      if (st.MPI_TAG == kRoundEnd) {
-        ++ends;
-        continue;
-      }
-      out.results[index] = timed(payload);
-      send_bytes(comm, 0, kResult, index, out.results[index]);
-    }
+  if (rank == 0) serve_master(comm, size, n, items, compute, opt, out, clock);
+  else serve_worker(comm, compute, out, clock);
+  if (n > 0) {
+    MPI_Request req;
+    MPI_Ibcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm, &req);
+    wait_sleeping(req);
   }
-  MPI_Bcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm);
+  if (rank == 0) clock.serve_cpu_s += thread_cpu_s() - cpu0;
   clock.farm_s += seconds_since(t_farm);
   return out;
 }

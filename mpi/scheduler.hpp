@@ -1,12 +1,17 @@
 // a task farm over MPI with dynamic load balancing (protocol in mpi/protocol.hpp).
 //
-// Rank 0 is the master: it holds the items and hands them out as workers ask. When ranks ≤ cores it
-// also computes items itself between messages, so `mpirun -np 2` on 2 cores uses both; with one rank it
-// computes everything. Results are placed by item index, so they do not depend on who computed what.
+// Rank 0 is the master: it holds the items and pushes them to the workers in blocks of consecutive items,
+// a few blocks ahead, so a worker always has its next block queued. On every rank items are computed in a
+// thread of their own while the calling thread serves messages (non-blocking sends, MPI_Improbe and
+// MPI_Imrecv), so nobody waits for a rank that is busy computing. The master computes items too when its
+// node has a core per rank; with one rank it computes everything. Results are placed by item index, so
+// they do not depend on who computed what, nor on the block sizes. A rank that waits sleeps (backing off
+// up to 2 ms) instead of spinning in MPI, so an oversubscribed rank leaves its core to the ranks that compute.
 #pragma once
 
 #include <mpi.h>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -14,12 +19,24 @@
 namespace divcoll::mpi {
 
 struct FarmOptions {
-  bool master_works = true;  // the master computes items between messages
+  // the master computes items too (in a thread beside its messages) when the ranks on its node are no more
+  // than the node's cores; otherwise, or when false, it only coordinates
+  bool master_works = true;
   // called on the master after each finished item with (items done, items total)
   std::function<void(int, int)> progress;
+  // items per task message: 0 = automatic (guided: ⌈items left / (4 × computing ranks)⌉, at most max_block);
+  // a block's results come back in one message. Results never depend on it.
+  int block = 0;
+  int max_block = 64;
+  // blocks a worker holds at once (one computing, the others queued)
+  int depth = 2;
+  // called on the master, in item order, as soon as items 0..i all have results (from farm()'s calling
+  // thread, while later items are still being computed): lets the caller fold results during the round
+  std::function<void(int64_t, const std::string&)> on_result;
 };
 
-// items: serialized tasks (significant on rank 0 only). compute: task bytes → result bytes.
+// items: serialized tasks (significant on rank 0 only). compute: task bytes → result bytes; it runs in a
+// thread of farm()'s own (one at a time on each rank), so it must not call MPI.
 // Returns on every rank a vector of n results (bytes); a rank holds the results it computed, and
 // rank 0 holds all of them. owner[i] (same on every rank) is the rank that computed item i.
 struct FarmResult {
@@ -27,10 +44,15 @@ struct FarmResult {
   std::vector<int> owner;
 };
 // this rank's running totals over every farm() call: seconds inside compute() and inside farm()
-// (the rest of a stage's wall time is the master's own work, I/O and checkpoints)
+// (the rest of a stage's wall time is the master's own work, I/O and checkpoints), and on rank 0 the cost
+// of serving: CPU seconds of the serving thread, seconds spent sending tasks and taking in results,
+// messages and bytes each way
 struct FarmClock {
   double compute_s = 0, farm_s = 0;
   long items = 0;
+  double serve_cpu_s = 0, task_s = 0, result_s = 0;
+  long task_msgs = 0, result_msgs = 0, results = 0;
+  double task_bytes = 0, result_bytes = 0;
 };
 FarmClock& farm_clock();
 

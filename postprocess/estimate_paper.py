@@ -2,7 +2,7 @@
 """Estimate of the paper-scale wall time per stage from the measured throughput of a scaling benchmark.
 
     /usr/bin/python3 postprocess/estimate_paper.py OUT [--paper configs/paper.toml] [--cores 2 64 512]
-                                                       [--measured PAPER_RUN.h5]
+                                                       [--measured PAPER_RUN.h5] [--farm FARM.csv]
 
 OUT holds run_np<N>.h5 written by jobs/bench-scaling.sh (the quick preset at N ranks). Per stage, the cost of
 one work unit (core-seconds) is the busy time summed over ranks divided by the work units of that run (the run
@@ -12,7 +12,9 @@ modelled compute time. The paper config's stages are then modelled as task-farm 
     time(p) = sum over phases of rounds x max(ceil(items / p) x mean item time, longest item time)
               + rounds x overhead per round,   item time = units per item x cost per unit,
 
-so a stage cannot use more ranks than the items of one round. Writes OUT/estimate.md and prints it. With
+so a stage cannot use more ranks than the items of one round. With --farm (jobs/bench-farm.sh's CSV) the
+rounds beyond 2 cores also pay for the master: p - 1 workers, the first blocks sent one after another, and
+no faster than the master serves items (postprocess/farm_model.py). Writes OUT/estimate.md and prints it. With
 --measured, prints (and appends) the estimate against the wall time of each complete stage of a paper-scale
 run file at its rank count. Exit status 2 on bad input (one line on stderr).
 
@@ -174,14 +176,39 @@ def stage_phases(cfg, stage, g, where="config"):
     raise InputError(f"unknown stage {stage}")
 
 
-def round_time(items, p, cost):
-    """One round of a dynamic task farm on p ranks (the master computes too)."""
+@dataclass
+class FarmCost:
+    """The task farm's master measured by jobs/bench-farm.sh (postprocess/farm_model.py): µs of its CPU per
+    item, µs per task message."""
+    c_serve: float
+    c_task: float
+    source: str
+
+
+def read_farm(path):
+    import farm_model
+    try:
+        top, rows = farm_model.read_costs(path)
+    except farm_model.InputError as e:
+        raise InputError(str(e)) from None
+    r = rows.get("during", rows["after"])
+    return FarmCost(float(r["master_cpu_us_per_item"]), float(r["task_us_per_msg"]),
+                    f"{os.path.basename(path)} at {top} ranks")
+
+
+def round_time(items, p, cost, farm=None):
+    """One round of a dynamic task farm on p ranks: all of them compute (farm None), or, with the master's
+    measured cost, p - 1 workers beyond 2 ranks, the first blocks sent one after another, and never faster
+    than the master can serve the items (postprocess/farm_model.py)."""
     n = sum(c for c, _ in items)
     if n == 0:
         return 0.0
     mean = sum(c * u for c, u in items) * cost / n
     longest = max(u for c, u in items if c > 0) * cost
-    return max(math.ceil(n / p) * mean, longest)
+    if farm is None:
+        return max(math.ceil(n / p) * mean, longest)
+    w = p if p <= 2 else p - 1
+    return max(math.ceil(n / w) * mean + min(w, n) * farm.c_task * 1e-6, longest, n * farm.c_serve * 1e-6)
 
 
 # ---- measured costs --------------------------------------------------------------------------------------
@@ -264,8 +291,8 @@ def reference(runs, stage):
     return min(have, key=lambda r: r.ranks) if have else None
 
 
-def compute_time(phases, p, c_sim, c_fit):
-    return sum(ph.rounds * round_time(ph.items, p, c_fit if ph.kind == "fit" else c_sim) for ph in phases)
+def compute_time(phases, p, c_sim, c_fit, farm=None):
+    return sum(ph.rounds * round_time(ph.items, p, c_fit if ph.kind == "fit" else c_sim, farm) for ph in phases)
 
 
 def grad_factor(runs):
@@ -317,10 +344,10 @@ def measure(runs, g=None):
 
 # ---- the estimate ----------------------------------------------------------------------------------------
 
-def estimate_stage(cfg, stage, cost, p, g, where="config"):
+def estimate_stage(cfg, stage, cost, p, g, where="config", farm=None):
     """Seconds of `stage` of config `cfg` on p ranks."""
     phases = stage_phases(cfg, stage, g, where)
-    return compute_time(phases, p, cost.c_sim, cost.c_fit) + cost.overhead * sum(ph.rounds for ph in phases)
+    return compute_time(phases, p, cost.c_sim, cost.c_fit, farm) + cost.overhead * sum(ph.rounds for ph in phases)
 
 
 def max_items(cfg, stage, g):
@@ -339,7 +366,7 @@ def fmt_h(h):
     return f"{h:.2g}"
 
 
-def estimate_table(paper_cfg, paper_path, stages, costs, g, g_src, cores, out):
+def estimate_table(paper_cfg, paper_path, stages, costs, g, g_src, cores, out, farm=None):
     here = os.cpu_count()
     head = ["stage", f"work ({UNIT})", "max items per round", f"cost (µs per {UNIT})", "overhead per round (s)"]
     head += [f"{p} core{'s' if p > 1 else ''}{' (this machine)' if p == here else ''} (h)" for p in cores]
@@ -356,7 +383,7 @@ def estimate_table(paper_cfg, paper_path, stages, costs, g, g_src, cores, out):
             cost += f" ({c.note})"
         cells = []
         for i, p in enumerate(cores):
-            h = estimate_stage(paper_cfg, st, c, p, g, paper_path) / 3600
+            h = estimate_stage(paper_cfg, st, c, p, g, paper_path, farm if p > 2 else None) / 3600
             totals[i] += h
             cells.append(fmt_h(h))
         md.append(f"| {st} | {work} | {max_items(paper_cfg, st, g)} | {cost} | {c.overhead:.3g} | "
@@ -375,7 +402,10 @@ def estimate_table(paper_cfg, paper_path, stages, costs, g, g_src, cores, out):
         f"Assumptions: one rank per core (ranks = cores), each core as fast as this machine's, a perfect network "
         f"(no message latency), no I/O contention (checkpoints and HDF5 writes cost per round what they cost in "
         f"the quick run), dynamic load balancing over items of equal cost within a round, failed episodes cost "
-        f"a full episode. A stage cannot use more cores than the items of one round (max items per round).")
+        f"a full episode. A stage cannot use more cores than the items of one round (max items per round)."
+        + (f" Beyond 2 cores the master only coordinates (p - 1 workers), sends the first blocks one after another "
+           f"({farm.c_task:.2f} µs each) and serves at most one item per {farm.c_serve:.2f} µs (measured by "
+           f"jobs/bench-farm.sh, {farm.source})." if farm else ""))
     return md, caption, totals
 
 
@@ -415,6 +445,7 @@ def main(argv=None):
     ap.add_argument("--paper", default=DEFAULTS, help="the config to estimate (default configs/paper.toml)")
     ap.add_argument("--cores", type=int, nargs="+", default=[2, 64, 512], help="core (= rank) counts")
     ap.add_argument("--measured", help="a paper-scale run file: its stages' wall time against the estimate")
+    ap.add_argument("--farm", help="farm.csv of jobs/bench-farm.sh: the master's measured cost per item, beyond 2 cores")
     a = ap.parse_args(argv)
     try:
         if any(p < 1 for p in a.cores):
@@ -428,7 +459,8 @@ def main(argv=None):
         if missing:
             raise InputError(f"{a.out}: no quick run timed stage(s) {', '.join(missing)} of {a.paper} "
                              f"(not in the quick config's run.stages, or not complete)")
-        md, caption, _ = estimate_table(paper, a.paper, stages, costs, g, g_src, a.cores, a.out)
+        farm = read_farm(a.farm) if a.farm else None
+        md, caption, _ = estimate_table(paper, a.paper, stages, costs, g, g_src, a.cores, a.out, farm)
         text = md + ["", caption]
         if a.measured:
             rows = compare_measured(a.measured, defaults, costs, g)

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Table and plot of a scaling benchmark (jobs/bench-scaling.sh): wall time per stage against ranks,
-speed-up, each stage's busy fraction and load imbalance, read from OUT/run_np<N>.h5.
+speed-up, each stage's busy fraction (in all, and of each rank: seconds computing items / wall seconds)
+and load imbalance, read from OUT/run_np<N>.h5.
 
     /usr/bin/python3 postprocess/fig_scaling.py OUT [--cores C]
 
@@ -39,6 +40,7 @@ def read(out):
                 busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
                 wall = float(g.attrs["wall_s_last_session"])
                 rows.append(dict(ranks=n, stage=st, wall_s=wall,
+                                 rank_busy=[b / wall for b in busy] if wall > 0 else [],
                                  busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
                                  master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
                                  imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan")))
@@ -55,10 +57,10 @@ def main(argv=None):
         print(f"fig_scaling: no run_np<N>.h5 with stage timings in {a.out}", file=sys.stderr)
         return 2
     with open(os.path.join(a.out, "scaling.csv"), "w") as fh:
-        fh.write("ranks,stage,wall_s,busy_fraction,master_busy,imbalance\n")
+        fh.write("ranks,stage,wall_s,busy_fraction,master_busy,imbalance,busy_per_rank\n")
         for r in rows:
             fh.write(f"{r['ranks']},{r['stage']},{r['wall_s']:.3f},{r['busy_fraction']:.3f},{r['master_busy']:.3f},"
-                     f"{r['imbalance']:.3f}\n")
+                     f"{r['imbalance']:.3f},{' '.join(f'{b:.3f}' for b in r['rank_busy'])}\n")
     ranks = sorted({r["ranks"] for r in rows})
     stages = [s for s in STAGES if any(r["stage"] == s for r in rows)]
     wall = {(r["ranks"], r["stage"]): r for r in rows}
@@ -74,8 +76,9 @@ def main(argv=None):
                 cells.append(f"**{w:.1f} s** (×{base / w:.2f})")
             elif (n, st) in wall:
                 r = wall[(n, st)]
-                cells.append(f"{r['wall_s']:.1f} s, busy {r['busy_fraction']:.0%}, master {r['master_busy']:.0%}, "
-                             f"imbalance {r['imbalance']:.2f}")
+                speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f})" if (ranks[0], st) in wall and n != ranks[0] else ""
+                cells.append(f"{r['wall_s']:.1f} s{speed}, busy {r['busy_fraction']:.0%} (per rank "
+                             f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}")
             else:
                 cells.append("—")
         md.append(f"| {st} | " + " | ".join(cells) + " |")

@@ -1,7 +1,8 @@
 """Read-only access to the experiment stages of a divcoll run file, and the statistics the figures use.
 
-Used by fig2.py, fig4.py, fig_s2.py and fig_s3.py. Layout read here (README "Run-file layout",
-mpi/deploy_stage.hpp, mpi/later_stages.hpp):
+Used by fig2.py, fig4.py, fig_s2.py and fig_s3.py. Layout read here (README "Run-file layout"; a dataset
+that names its axes, as every one the run-file schema writes does, must name the ones below, and
+environment / type lists come from the groups' attributes):
 
     /deploy        attributes environments (flat first), types, envs_done, status
                    agents/{travel_bl,status} (E × P); collectives/{travel_bl,status} (E × T × R × NP)
@@ -190,7 +191,10 @@ def _require_stage(f, path, stage: str):
     return f[stage]
 
 
-def _dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None) -> np.ndarray:
+def _dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None,
+             axes: Optional[Tuple[str, ...]] = None) -> np.ndarray:
+    """The dataset `name`, refused unless it has `shape` and (when the file names its axes: the run-file
+    schema's `axes` attribute) the axes `axes`."""
     import h5py
 
     if name not in f or not isinstance(f[name], h5py.Dataset):
@@ -201,6 +205,8 @@ def _dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None) -> np.
     d = f[name]
     if shape is not None and tuple(d.shape) != tuple(shape):
         raise RunFileError(f"{path}: /{name} has shape {d.shape}, expected {tuple(shape)}")
+    if axes is not None and "axes" in d.attrs and _s(d.attrs["axes"]) != ",".join(axes):
+        raise RunFileError(f"{path}: /{name} has axes {_s(d.attrs['axes'])}, expected {','.join(axes)}")
     return d[()]
 
 
@@ -285,10 +291,11 @@ def load_deploy(path) -> Deploy:
         if done == 0:
             raise StageMissing(f"{path}: the deploy stage has no finished environment yet "
                                f"(status '{_s(g.attrs.get('status', '?'))}'; run the deploy stage first)")
-        at = _dataset(f, path, "deploy/agents/travel_bl")
-        ast = _dataset(f, path, "deploy/agents/status", at.shape)
-        ct = _dataset(f, path, "deploy/collectives/travel_bl")
-        cst = _dataset(f, path, "deploy/collectives/status", ct.shape)
+        alone, pairs = ("env", "agent"), ("env", "type", "replicate", "pair")
+        at = _dataset(f, path, "deploy/agents/travel_bl", axes=alone)
+        ast = _dataset(f, path, "deploy/agents/status", at.shape, alone)
+        ct = _dataset(f, path, "deploy/collectives/travel_bl", axes=pairs)
+        cst = _dataset(f, path, "deploy/collectives/status", ct.shape, pairs)
         if at.ndim != 2 or at.shape[0] != len(envs):
             raise RunFileError(f"{where}/agents/travel_bl: shape {at.shape}, expected ({len(envs)}, population)")
         if ct.ndim != 4 or ct.shape[0] != len(envs) or ct.shape[1] != len(types):
@@ -331,8 +338,11 @@ def load_scaling(path) -> Scaling:
             raise StageMissing(f"{path}: the scaling stage has no finished environment yet "
                                f"(status '{_s(g.attrs.get('status', '?'))}'; run the scaling stage first)")
         sizes = [int(x) for x in np.asarray(_dataset(f, path, "scaling/sizes")).ravel()]
-        t = _dataset(f, path, "scaling/travel_bl")
-        st = _dataset(f, path, "scaling/status", t.shape)
+        chains = ("env", "size", "variant", "replicate", "draw")
+        t = _dataset(f, path, "scaling/travel_bl", axes=chains)
+        st = _dataset(f, path, "scaling/status", t.shape, chains)
+        if "variants" in g.attrs and tuple(_list_attr(g, "variants", where)) != Scaling.VARIANTS:
+            raise RunFileError(f"{where}: variants {_s(g.attrs['variants'])}, expected {','.join(Scaling.VARIANTS)}")
         if t.ndim != 5 or t.shape[0] != len(envs) or t.shape[1] != len(sizes) or t.shape[2] != 2:
             raise RunFileError(f"{where}/travel_bl: shape {t.shape}, expected "
                                f"({len(envs)}, {len(sizes)}, 2, replicates, draws)")
@@ -373,8 +383,9 @@ def load_specialists(path) -> Specialists:
     with _open(path) as f:
         g = _require_stage(f, path, "specialists")
         envs = _list_attr(g, "environments", f"{path}: /specialists")
-        t = _dataset(f, path, "specialists/travel_bl")
-        st = _dataset(f, path, "specialists/status", t.shape)
+        spec = ("env", "replicate", "pair")
+        t = _dataset(f, path, "specialists/travel_bl", axes=spec)
+        st = _dataset(f, path, "specialists/status", t.shape, spec)
         if t.ndim != 3 or t.shape[0] != len(envs):
             raise RunFileError(f"{path}: /specialists/travel_bl: shape {t.shape}, expected "
                                f"({len(envs)}, replicates, pairs)")
@@ -441,10 +452,11 @@ def load_graded(path) -> List[GradedPopulation]:
                 raise StageMissing(f"{where}/{p} has status '{_s(gp.attrs.get('status', '?'))}' "
                                    f"(run the graded stage to the end first)")
             base = f"graded/{p}/deploy"
-            at = _dataset(f, path, f"{base}/agents/travel_bl")
-            ast = _dataset(f, path, f"{base}/agents/status", at.shape)
-            pt = _dataset(f, path, f"{base}/pairs/travel_bl")
-            pst = _dataset(f, path, f"{base}/pairs/status", pt.shape)
+            alone, pairs = ("env", "agent"), ("env", "replicate", "pair")
+            at = _dataset(f, path, f"{base}/agents/travel_bl", axes=alone)
+            ast = _dataset(f, path, f"{base}/agents/status", at.shape, alone)
+            pt = _dataset(f, path, f"{base}/pairs/travel_bl", axes=pairs)
+            pst = _dataset(f, path, f"{base}/pairs/status", pt.shape, pairs)
             if at.ndim != 2 or at.shape[0] != len(envs) or pt.ndim != 3 or pt.shape[0] != len(envs):
                 raise RunFileError(f"{where}/{p}/deploy: shapes {at.shape} and {pt.shape}, expected "
                                    f"({len(envs)}, population) and ({len(envs)}, replicates, pairs)")

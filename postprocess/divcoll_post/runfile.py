@@ -30,26 +30,24 @@ except ImportError as e:  # pragma: no cover - depends on the interpreter
     ) from e
 
 FORMAT = "divcoll-run"
-N_MASSES = 11
-N_SPRINGS = 21
-N_PARAMS = 3509  # SPEC §4.3: 54 -> 32 -> 32 -> 21, W then b per layer
-N_DESCRIPTOR = 9
 STATUS_NAMES = {0: "ok", 1: "nan", 2: "unstable"}
 
-# name -> (dtype kind, shape after the row axis; None = any)
+# name -> (dtype kind, the axes after the row axis `agent`; None = any). The lengths of those axes are the
+# file's (the same in every dataset that has the axis), and a dataset that names its axes (the run-file
+# schema's `axes` attribute) must name these.
 _AGENT_DATASETS = {
     "id": ("i", ()),
     "parent": ("i", ()),
     "cells": ("i", ()),
     "springs": ("i", ()),
-    "rest_pos": ("f", (N_MASSES, 2)),
-    "spring_i": ("i", (N_SPRINGS,)),
-    "spring_j": ("i", (N_SPRINGS,)),
-    "amplitude": ("f", (N_SPRINGS,)),
-    "params": ("f", None),
+    "rest_pos": ("f", ("mass", "xy")),
+    "spring_i": ("i", ("spring",)),
+    "spring_j": ("i", ("spring",)),
+    "amplitude": ("f", ("spring",)),
+    "params": ("f", ("agent_weight",)),
     "fitness": ("f", ()),
     "travel_u": ("f", ()),
-    "descriptor": ("f", None),
+    "descriptor": ("f", ("descriptor",)),
     "uniqueness": ("f", ()),
     "status": ("iu", ()),
 }
@@ -87,7 +85,7 @@ class Population:
     spring_i: np.ndarray  # (M, 21), local mass index
     spring_j: np.ndarray  # (M, 21)
     amplitude: np.ndarray  # (M, 21), 0 = passive
-    params: Optional[np.ndarray]  # (M, 3509); None when read with params=False
+    params: Optional[np.ndarray]  # (M, agent weights); None when read with params=False
     fitness: np.ndarray  # (M,), BL on flat ground
     travel_u: np.ndarray  # (M,), u
     descriptor: np.ndarray  # (M, 9)
@@ -248,24 +246,26 @@ def _read_population(f, path, group: str, params: bool) -> Population:
         raise RunFileError(f"{where}: missing dataset(s) {', '.join(missing)}")
     rows = g["fitness"].shape[0] if g["fitness"].ndim >= 1 else None
     out = {}
+    lengths = {}  # axis name -> its length in this file
     for k, (kind, tail) in _AGENT_DATASETS.items():
         d = g[k]
-        if k == "params" and not params:
-            out[k] = None
-            continue
         if d.ndim < 1 or d.shape[0] != rows:
             raise RunFileError(f"{where}/{k}: shape {d.shape}, expected {rows} rows (one per agent)")
-        if tail is not None and tuple(d.shape[1:]) != tail:
-            raise RunFileError(f"{where}/{k}: shape {d.shape}, expected {(rows,) + tail}")
-        if k in ("params", "descriptor") and d.ndim != 2:
-            raise RunFileError(f"{where}/{k}: shape {d.shape}, expected 2 dimensions")
+        if d.ndim != 1 + len(tail):
+            raise RunFileError(f"{where}/{k}: shape {d.shape}, expected axes (agent, {', '.join(tail)})")
+        if "axes" in d.attrs and _decode(d.attrs["axes"]) != ",".join(("agent",) + tail):
+            raise RunFileError(f"{where}/{k}: axes {_decode(d.attrs['axes'])}, expected {','.join(('agent',) + tail)}")
+        for name, n in zip(tail, d.shape[1:]):
+            if lengths.setdefault(name, n) != n:
+                raise RunFileError(f"{where}/{k}: shape {d.shape}: axis {name} has length {n}, elsewhere {lengths[name]}")
         if d.dtype.kind not in kind and not (kind == "f" and d.dtype.kind in "iu"):
             raise RunFileError(f"{where}/{k}: dtype {d.dtype}, expected {'float' if kind == 'f' else 'integer'}")
-        out[k] = d[()]
+        out[k] = None if (k == "params" and not params) else d[()]
+    n_masses = lengths["mass"]
     for k in ("spring_i", "spring_j"):
         a = out[k]
-        if a.size and (a.min() < 0 or a.max() >= N_MASSES):
-            raise RunFileError(f"{where}/{k}: mass index out of range 0..{N_MASSES - 1}")
+        if a.size and (a.min() < 0 or a.max() >= n_masses):
+            raise RunFileError(f"{where}/{k}: mass index out of range 0..{n_masses - 1}")
     survived = None
     if "survived" in g and isinstance(g["survived"], h5py.Dataset):
         survived = g["survived"][()]
@@ -278,7 +278,7 @@ def _read_population(f, path, group: str, params: bool) -> Population:
 
 
 def read_final(path, params: bool = True) -> Population:
-    """The final population (/agents/final). params=False skips the (M × 3509) controller weights."""
+    """The final population (/agents/final). params=False skips the (M × weights) controller weights."""
     with _open(path) as f:
         return _read_population(f, path, "agents/final", params)
 

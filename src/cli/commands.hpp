@@ -87,6 +87,10 @@ int gd_compare(const GdCompareArgs& a);
 // divcoll compare A B: 0 if every dataset is bit-identical, 1 if not
 int compare(const std::string& a, const std::string& b);
 
+// divcoll schema [--check RUN.h5]: the run-file schema as markdown (the README's tables), or a run file's
+// disagreements with it (0 none, 1 some)
+int schema(const std::string& check);
+
 // divcoll envs: the built-in environments
 int envs();
 

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/check.hpp"
+#include "io/run_file.hpp"
 
 namespace divcoll::io::h5 {
 
@@ -250,13 +251,19 @@ void Node::write_int(const std::string& attr, int64_t v) const {
                          file_ + ": " + attr_label(name_, attr));
 }
 
-void Node::write_string(const std::string& attr, const std::string& v) const {
-  const std::string w = file_ + ": " + attr_label(name_, attr);
+namespace {
+// a variable-length UTF-8 string attribute (replacing one of the same name)
+void write_string_attribute(hid_t obj, const std::string& attr, const std::string& v, const std::string& where) {
   Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
   if (!t.valid() || H5Tset_size(t.id(), H5T_VARIABLE) < 0 || H5Tset_cset(t.id(), H5T_CSET_UTF8) < 0)
-    fail(w, "cannot make a string type");
+    fail(where, "cannot make a string type");
   const char* p = v.c_str();
-  write_scalar_attribute(id(), attr, t.id(), t.id(), &p, w);
+  write_scalar_attribute(obj, attr, t.id(), t.id(), &p, where);
+}
+}  // namespace
+
+void Node::write_string(const std::string& attr, const std::string& v) const {
+  write_string_attribute(id(), attr, v, file_ + ": " + attr_label(name_, attr));
 }
 
 double Node::read_double(const std::string& attr) const {
@@ -315,6 +322,14 @@ std::string Node::read_string(const std::string& attr) const {
 
 // ---- Node: datasets ----------------------------------------------------------------------------
 
+void Node::annotate(hid_t dataset, const std::string& path, const char* dtype, const Dims& dims) const {
+  Handle r(H5Gopen2(id(), "/", H5P_DEFAULT), H5Gclose);
+  if (!r.valid()) fail(where(path), "cannot open the root group");
+  const Node root(std::move(r), file_, "/");
+  for (const auto& [attr, v] : run_file::attributes(root, path_of(path), dtype, dims))
+    write_string_attribute(dataset, attr, v, where(path) + ": attribute " + attr);
+}
+
 template <class T>
 void Node::write(const std::string& path, const std::vector<T>& data, const Dims& dims) const {
   static_assert(is_element<T>::value, "h5 datasets hold double, float, int32, int64 or uint8");
@@ -332,6 +347,7 @@ void Node::write(const std::string& path, const std::vector<T>& data, const Dims
       H5Dcreate2(id(), path.c_str(), Element<T>::file(), space.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
       H5Dclose);
   if (!d.valid()) fail(w, "cannot create the dataset");
+  annotate(d.id(), path, Element<T>::name, dims);
   // an empty selection needs no write (and HDF5 1.10 refuses a null buffer)
   if (!data.empty() && H5Dwrite(d.id(), Element<T>::mem(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0)
     fail(w, "cannot write the dataset");
@@ -356,10 +372,13 @@ void Node::write_rows(const std::string& path, const Dims& dims, const std::vect
     if (this->dims(path) != dims) throw InputError(w + ": exists with dims " + dims_string(this->dims(path)) +
                                                    ", not " + dims_string(dims));
     d = Handle(H5Dopen2(id(), path.c_str(), H5P_DEFAULT), H5Dclose);
+    // (a dataset created just before a kill may lack the schema's attributes)
+    if (d.valid() && H5Aexists(d.id(), "axes") == 0) annotate(d.id(), path, Element<T>::name, dims);
   } else {
     Handle lcpl = intermediate_lcpl(w);
     d = Handle(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
                H5Dclose);
+    if (d.valid()) annotate(d.id(), path, Element<T>::name, dims);
   }
   if (!d.valid()) fail(w, "cannot create the dataset");
   // this rank's rows, as a union of one-row hyperslabs (or none)

@@ -4,7 +4,8 @@
 // turned off; every failure becomes a divcoll::InputError whose message names the file and the object
 // ("runs/a.h5: masses/x0: ..."), with HDF5's own innermost reason appended where it has one.
 // Datasets are contiguous, written in one piece; files are opened for serial access unless the caller
-// passes a file access property list (e.g. an MPI-IO one).
+// passes a file access property list (e.g. an MPI-IO one). A dataset created in a run file gets the
+// attributes of its row of the run-file schema (io/run_file.hpp).
 #pragma once
 
 #include <hdf5.h>
@@ -115,6 +116,9 @@ class Node {
 
   // the object path of `child` relative to the root, for messages
   std::string path_of(const std::string& child) const;
+  // in a run file, the schema's attributes (axes, unit, doc, axis labels) on dataset `path`, just created
+  // (io/run_file.hpp; nothing in other files)
+  void annotate(hid_t dataset, const std::string& path, const char* dtype, const Dims& dims) const;
   static std::string absolute(const std::string& p);
 };
 

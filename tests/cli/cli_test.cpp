@@ -16,6 +16,7 @@
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "io/h5.hpp"
+#include "io/run_file.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
 
@@ -187,6 +188,16 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const Exec r = run("run " + cfg + " --out " + path("run.h5"));  // every stage
   ASSERT_EQ(r.code, 0) << r.out;
   const io::h5::File f = io::h5::File::open(path("run.h5"));
+  // every group and dataset has its row of the run-file schema (types, dims along the named axes, the
+  // axes / unit / doc / labels attributes), and every row is in the file (tests/io/run_file_test.cpp)
+  for (const std::string& p : io::run_file::check(f, /*every_row=*/true)) ADD_FAILURE() << p;
+  const Exec checked = run("schema --check " + path("run.h5"));
+  EXPECT_EQ(checked.code, 0) << checked.out;
+  EXPECT_NE(checked.out.find("every group and dataset matches the run-file schema"), std::string::npos) << checked.out;
+  io::h5::File::create(path("other.h5"), true).write_string("format", "divcoll-scene");
+  const Exec refused = run("schema --check " + path("other.h5"));
+  EXPECT_EQ(refused.code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("is not a divcoll run file"), std::string::npos) << refused.out;
   using D = io::h5::Dims;
   const hsize_t P = 6, G = 2, R = 1, I = 2, E = 4, T = 8, NP = 4, Pa = 3509, Pc = 1473;
   // agents

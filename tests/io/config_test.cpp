@@ -190,9 +190,8 @@ TEST(ConfigSchema, MarkdownListsEveryKey) {
 
 // the README's key table is the schema's (regenerate it with `divcoll keys`)
 TEST(ConfigSchema, ReadmeTableIsTheSchema) {
-  std::ifstream in(testing::source_dir() + "/README.md");
-  ASSERT_TRUE(in) << "README.md not found";
-  const std::string readme((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string readme = testing::readme();
+  ASSERT_FALSE(readme.empty()) << "README.md not found";
   EXPECT_NE(readme.find(schema_markdown()), std::string::npos)
       << "README.md's config table differs from the schema: replace it with the output of `divcoll keys`";
 }

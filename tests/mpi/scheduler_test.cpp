@@ -25,7 +25,6 @@ int size_of(MPI_Comm c = MPI_COMM_WORLD) {
 }
 
 TEST(Farm, EveryItemIsComputedOnceAndResultsArriveInItemOrder) {
-  ASSERT_GE(size_of(), 2) << "run me under mpirun -np 2 or more";
   const int n = 37;
   std::vector<std::string> items;
   if (rank_of() == 0)
@@ -55,6 +54,96 @@ TEST(Farm, EveryItemIsComputedOnceAndResultsArriveInItemOrder) {
   int mine = 0;
   for (int o : r.owner) mine += o == rank_of();
   EXPECT_EQ(mine, computed_here);
+}
+
+// item i's result: a deterministic function of its task, of a length that varies (0 included)
+std::string expected_result(int64_t i) {
+  std::string r(static_cast<size_t>((i * 7919) % 23), '\0');
+  for (size_t k = 0; k < r.size(); ++k) r[k] = static_cast<char>('a' + (i + static_cast<int64_t>(k)) % 26);
+  return r;
+}
+
+// every block size, depth and item count (none, fewer than the ranks, many) gives the same results in item
+// order on the master, each item computed once, in-order on_result and one progress call per item
+TEST(Farm, ResultsDoNotDependOnBlocksDepthOrRanks) {
+  struct Case {
+    int n, block, max_block, depth;
+    bool master_works;
+  };
+  const std::vector<Case> cases = {
+      {0, 0, 64, 2, true},   {1, 0, 64, 2, true},   {2, 0, 64, 2, false}, {3, 1, 64, 1, true},
+      {5, 2, 64, 3, false},  {17, 0, 4, 2, true},   {17, 1000, 64, 2, true}, {64, 7, 64, 1, false},
+      {100, 0, 64, 2, true}, {100, 0, 1, 4, false}, {257, 3, 64, 2, true}, {257, 0, 64, 2, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(::testing::Message() << "n " << c.n << " block " << c.block << " max_block " << c.max_block
+                                      << " depth " << c.depth << " master_works " << c.master_works);
+    std::vector<std::string> items;
+    if (rank_of() == 0)
+      for (int i = 0; i < c.n; ++i) items.push_back(mpi::pack(static_cast<int64_t>(i)));
+    int computed_here = 0;
+    std::vector<int64_t> folded;
+    int progress_calls = 0, last_done = 0;
+    mpi::FarmOptions opt;
+    opt.block = c.block;
+    opt.max_block = c.max_block;
+    opt.depth = c.depth;
+    opt.master_works = c.master_works;
+    opt.progress = [&](int done, int total) {
+      ++progress_calls;
+      EXPECT_EQ(done, last_done + 1);
+      EXPECT_EQ(total, c.n);
+      last_done = done;
+    };
+    opt.on_result = [&](int64_t i, const std::string& r) {
+      EXPECT_EQ(r, expected_result(i));
+      folded.push_back(i);
+    };
+    const mpi::FarmResult r = mpi::farm(MPI_COMM_WORLD, items, [&](const std::string& b) {
+      ++computed_here;
+      const int64_t i = mpi::unpack<int64_t>(b);
+      volatile double s = 0;  // uneven item costs, so the items spread unevenly over the ranks
+      for (int k = 0; k < 20000 * (i % 5); ++k) s = s + 1e-9 * k;
+      return expected_result(i);
+    }, opt);
+    ASSERT_EQ(static_cast<int>(r.results.size()), c.n);
+    ASSERT_EQ(static_cast<int>(r.owner.size()), c.n);
+    int total = 0;
+    MPI_Allreduce(&computed_here, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    EXPECT_EQ(total, c.n);
+    int mine = 0;
+    for (int i = 0; i < c.n; ++i) {
+      ASSERT_GE(r.owner[i], 0);
+      ASSERT_LT(r.owner[i], size_of());
+      mine += r.owner[i] == rank_of();
+      if (rank_of() == 0 || r.owner[i] == rank_of()) {
+        EXPECT_EQ(r.results[i], expected_result(i)) << "item " << i;
+      } else {
+        EXPECT_TRUE(r.results[i].empty());
+      }
+    }
+    EXPECT_EQ(mine, computed_here);
+    if (rank_of() == 0) {
+      EXPECT_EQ(progress_calls, c.n);
+      ASSERT_EQ(static_cast<int>(folded.size()), c.n);
+      for (int i = 0; i < c.n; ++i) EXPECT_EQ(folded[i], i);
+      if (size_of() > 1 && !c.master_works)
+        for (int o : r.owner) {
+        EXPECT_NE(o, 0) << "the master computed although told not to";
+      }
+    } else {
+      EXPECT_EQ(progress_calls, 0);
+      EXPECT_TRUE(folded.empty());
+    }
+  }
+}
+
+// an owner array (every item's rank) broadcast from the master: every rank sees the same one
+TEST(Farm, EveryRankSeesTheSameOwners) {
+  std::vector<std::string> items(rank_of() == 0 ? 50 : 0, mpi::pack(int64_t{3}));
+  const mpi::FarmResult r = mpi::farm(MPI_COMM_WORLD, items, [](const std::string& b) { return b; });
+  std::vector<int> mine = r.owner, master = r.owner;
+  MPI_Bcast(master.data(), static_cast<int>(master.size()), MPI_INT, 0, MPI_COMM_WORLD);
+  EXPECT_EQ(mine, master);
 }
 
 TEST(Farm, WorkersShareTheWorkWhenItemsAreSlow) {
