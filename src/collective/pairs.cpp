@@ -33,6 +33,7 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
   sim::RunOptions opt;
   opt.steps = steps;
   opt.grad = grad;
+  opt.agent_param_grad = false;  // only the connector gradient is returned: the agents stay frozen
   return run_pair(sim, P, A, params, stiffness, env, opt, nullptr);
 }
 

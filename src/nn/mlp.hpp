@@ -4,8 +4,12 @@
 // genome, the gradient (same layout) and the MPI payload. Every layer is followed by tanh.
 //
 // Activations are kept per layer as a column-major (size × cols) block, so one call evaluates the
-// network on `cols` inputs at once (a GEMM: the 5·C springs of the connectors of a collective share
-// one weight set). The caller owns every buffer: forward and backward allocate nothing.
+// network on `cols` inputs at once (the 5·C springs of the connectors of a collective share one weight
+// set). The kernels read the weights in a packed copy (pack(), once per parameter vector): per layer
+// Wᵀ (in × out rounded up to 4) for the forward pass, so that every output is a vector lane and a layer
+// is a chain of broadcast-multiply-adds with no horizontal sums, and W with rows padded to a multiple of 4
+// for the input gradient. With packed weights the caller owns every buffer: the *_packed calls
+// allocate nothing; forward() and backward() on a plain parameter vector pack into a temporary first.
 #pragma once
 
 #include <vector>
@@ -32,13 +36,22 @@ struct Layout {
 Layout agent_layout(int n_inputs);  // n_inputs → 32 → 32 → 21
 Layout connector_layout();          // 11 → 32 → 32 → 1
 
+// doubles of the packed copy of a parameter vector
+int packed_count(const Layout& L);
+// params (param_count()) → packed (packed_count())
+void pack(const Layout& L, const double* params, double* packed);
+
 // acts: activation buffer of activation_count()*cols doubles, laid out as blocks per layer, each block
 // (size_l × cols) column-major; the caller fills the input block (l = 0), forward fills the rest.
+void forward_packed(const Layout& L, const double* packed, int cols, double* acts);
 void forward(const Layout& L, const double* params, int cols, double* acts);
 
 // backward from the gradient of the loss w.r.t. the outputs (post-tanh), out_grad (out × cols).
 // adds the parameter gradient into param_grad (param_count()) and, when in_grad is not null, writes the
 // gradient w.r.t. the input block into in_grad (in × cols). scratch: scratch_count()*cols doubles.
+// param_grad may be null: no parameter gradient is computed (frozen weights; that is a third of the work)
+void backward_packed(const Layout& L, const double* packed, int cols, const double* acts, const double* out_grad,
+                     double* param_grad, double* in_grad, double* scratch);
 void backward(const Layout& L, const double* params, int cols, const double* acts, const double* out_grad,
               double* param_grad, double* in_grad, double* scratch);
 

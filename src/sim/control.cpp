@@ -2,6 +2,7 @@
 //
 // agents: 54 inputs (10 sines, then per mass (x − c)κ_a and v κ_a), one network per agent, o ← α y + (1−α) o
 // connectors: 11 inputs per spring, one weight set for all 5·C connector springs (a single GEMM)
+#include <algorithm>
 #include <cmath>
 
 #include "sim/stages.hpp"
@@ -20,8 +21,11 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
   for (int a = 0; a < m.A; ++a) {
     double* act = buf.agent_acts + static_cast<size_t>(a) * na;
     const int32_t* mi = &sc.agent_mass_index[a * kAgentMasses];
-    for (int j = 0; j < k.n_sines; ++j)
-      act[j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
+    // the sines are the same for every agent: computed for the first, copied to the others
+    if (a == 0)
+      for (int j = 0; j < k.n_sines; ++j) act[j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
+    else
+      std::copy(buf.agent_acts, buf.agent_acts + k.n_sines, act);
     double cx = 0, cy = 0;
     for (int q = 0; q < kAgentMasses; ++q) {
       cx += x[2 * mi[q]];
@@ -36,7 +40,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
       in[4 * q + 2] = v[2 * mi[q]] * ka;
       in[4 * q + 3] = v[2 * mi[q] + 1] * ka;
     }
-    nn::forward(m.agent_layout, &sc.agent_params[static_cast<size_t>(a) * m.agent_params], 1, act);
+    nn::forward_packed(m.agent_layout, &m.agent_packed[static_cast<size_t>(a) * m.agent_packed_count], 1, act);
     const double* y = act + m.agent_layout.activation_offset(m.agent_layout.n_layers());
     const int32_t* si = &sc.agent_spring_index[a * kAgentSprings];
     for (int r = 0; r < kAgentSprings; ++r) o[si[r]] = k.agent_alpha * y[r] + (1.0 - k.agent_alpha) * o[si[r]];
@@ -76,7 +80,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
       col[10] = std::sqrt(dx * dx + dy * dy + eps2) / sc.rest_length[s];
     }
   }
-  nn::forward(m.conn_layout, sc.connector_params.data(), cols, buf.conn_acts);
+  nn::forward_packed(m.conn_layout, m.conn_packed.data(), cols, buf.conn_acts);
   const double* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
@@ -106,8 +110,8 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
     }
     double* in_grad = scratch;
     double* nn_scratch = scratch + m.agent_layout.in();
-    nn::backward(m.agent_layout, &sc.agent_params[static_cast<size_t>(a) * m.agent_params], 1, act, yb,
-                 g_agent + static_cast<size_t>(a) * m.agent_params, in_grad, nn_scratch);
+    nn::backward_packed(m.agent_layout, &m.agent_packed[static_cast<size_t>(a) * m.agent_packed_count], 1, act, yb,
+                        g_agent ? g_agent + static_cast<size_t>(a) * m.agent_params : nullptr, in_grad, nn_scratch);
     // inputs (x − c) κ and v κ, c = mean of the agent's masses
     const double* g = in_grad + k.n_sines;
     double cbx = 0, cby = 0;
@@ -139,7 +143,7 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
     yb[c] = ac * ob[s];
     ob[s] *= (1.0 - ac);
   }
-  nn::backward(m.conn_layout, sc.connector_params.data(), cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
+  nn::backward_packed(m.conn_layout, m.conn_packed.data(), cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
   for (int c = 0; c < m.C; ++c) {
     double mbx = 0, mby = 0;
     for (int r = 0; r < kConnectorSprings; ++r) {

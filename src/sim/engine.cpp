@@ -106,6 +106,20 @@ RunResult simulate(const Scene& scene, const RunOptions& opt) {
   return sim.run(scene, opt);
 }
 
+namespace {
+// the contact events of one substep's records, counted while they are in cache
+void count_contacts(const ContactRecord* rec, int N, RunResult::ContactCounts& c) {
+  for (int i = 0; i < N; ++i) {
+    const ContactRecord& r = rec[i];
+    c.floor += r.kind == 1;
+    c.wall += r.kind == 2;
+    c.sliding += r.friction_active;
+    c.toi += r.toi_active;
+    c.belt += r.kind == 1 && (r.b[0] != 0 || r.b[1] != 0);
+  }
+}
+}  // namespace
+
 RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   // non-finite controller weights are not refused here: they end the episode with status nan
   validate(sc, ValidateOptions{.finite_params = false});
@@ -170,6 +184,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
       contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
                       opt.grad ? &recs[static_cast<size_t>(k) * N] : nullptr);
+      if (opt.grad) count_contacts(&recs[static_cast<size_t>(k) * N], N, res.contacts);
     }
     // numerical trouble ends the episode, with where it happened
     const double* x1 = sx(k);
@@ -198,8 +213,9 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
 
   if (res.status != Status::ok) {
     res.travel = std::numeric_limits<double>::quiet_NaN();
+    res.contacts = {};  // as before: counted for finished episodes only
     if (opt.grad) {
-      res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+      if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
       res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
       res.grad_x0.assign(N2, 0.0);
       res.grad_rest_length.assign(S, 0.0);
@@ -217,17 +233,8 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   res.travel = sT / N - s0 / N;
   if (!opt.grad) return res;
 
-  for (size_t q = 0; q < static_cast<size_t>(k) * N; ++q) {
-    const ContactRecord& r = recs[q];
-    res.contacts.floor += r.kind == 1;
-    res.contacts.wall += r.kind == 2;
-    res.contacts.sliding += r.friction_active;
-    res.contacts.toi += r.toi_active;
-    res.contacts.belt += r.kind == 1 && (r.b[0] != 0 || r.b[1] != 0);
-  }
-
   // ---- backward ------------------------------------------------------------------------------------
-  res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
+  if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
   res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
   res.grad_rest_length.assign(S, 0.0);
   double* Lbar = res.grad_rest_length.data();
@@ -243,7 +250,24 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   }
   std::fill(vbar, vbar + N2, 0.0);
   std::fill(ob.begin(), ob.begin() + S, 0.0);
+  // the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from
+  // several arrays at once, which the hardware prefetcher follows poorly: step t − 1's blocks are asked for
+  // while step t is being processed
+  auto prefetch = [](const void* p, size_t bytes) {
+    const char* c = static_cast<const char*>(p);
+    for (size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q);
+  };
   for (int t = T - 1; t >= 0; --t) {
+    if (t > 0) {
+      const size_t k0 = static_cast<size_t>(t - 1) * n;
+      prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
+      prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
+      prefetch(&recs[k0 * N], sizeof(ContactRecord) * n * N);
+      prefetch(&xs[k0 * N2], sizeof(double) * n * N2);
+      prefetch(&vs[k0 * N2], sizeof(double) * n * N2);
+      prefetch(&vps[k0 * N2], sizeof(double) * n * N2);
+      prefetch(&os[static_cast<size_t>(t) * S], sizeof(double) * S);
+    }
     const double* o = &os[(t + 1) * static_cast<size_t>(S)];
     for (int s = n - 1; s >= 0; --s) {
       --k;
@@ -258,8 +282,8 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       std::swap(vbar, vbar_prev);
     }
     ControlBuffers cb{&agent_acts[static_cast<size_t>(t) * m.A * na], &conn_acts[static_cast<size_t>(t) * nc]};
-    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar, res.grad_agent_params.data(), gc,
-                    scratch.data());
+    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar,
+                    opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc, scratch.data());
   }
   // x0 is both the initial state and travel's baseline
   res.grad_x0.assign(xbar, xbar + N2);

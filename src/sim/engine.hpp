@@ -34,6 +34,8 @@ const char* status_name(Status s);
 struct RunOptions {
   int steps = 1000;              // control steps T
   bool grad = false;             // reverse-mode gradient of travel (keeps a tape)
+  bool agent_param_grad = true;  // with grad: also w.r.t. the agents' controller weights (a third of the
+                                 // MLP backward; connector training leaves them frozen and sets false)
   bool record = false;           // keep x, v, touch at every step for output
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
@@ -59,7 +61,7 @@ struct RunResult {
   } contacts;
 
   // with grad (zero when status is not ok)
-  std::vector<double> grad_agent_params;      // (A x P_a)
+  std::vector<double> grad_agent_params;      // (A x P_a), empty unless agent_param_grad
   std::vector<double> grad_connector_params;  // (P_c), empty when C = 0
   std::vector<double> grad_x0;                // (N x 2)
   std::vector<double> grad_rest_length;       // (S)

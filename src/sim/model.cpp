@@ -39,6 +39,13 @@ void Model::compile(const Scene& s, int n_substeps) {
   conn_layout = nn::connector_layout();
   agent_params = agent_layout.param_count();
   conn_params = conn_layout.param_count();
+  agent_packed_count = nn::packed_count(agent_layout);
+  agent_packed.resize(static_cast<size_t>(A) * agent_packed_count);
+  for (int a = 0; a < A; ++a)
+    nn::pack(agent_layout, &s.agent_params[static_cast<size_t>(a) * agent_params],
+             &agent_packed[static_cast<size_t>(a) * agent_packed_count]);
+  conn_packed.resize(C > 0 ? nn::packed_count(conn_layout) : 0);
+  if (C > 0) nn::pack(conn_layout, s.connector_params.data(), conn_packed.data());
 
   // distinct anchors of each connector, in order of first appearance (i then j, spring by spring)
   conn_anchor_start.assign(1, 0);

@@ -35,6 +35,10 @@ struct Model {
   // controllers
   nn::Layout agent_layout, conn_layout;
   int agent_params = 0, conn_params = 0;
+  // the controllers' weights packed for the MLP kernels (nn::pack): A × nn::packed_count(agent_layout), and
+  // nn::packed_count(conn_layout) for the connectors' shared weights
+  int agent_packed_count = 0;
+  std::vector<double> agent_packed, conn_packed;
   // distinct anchor masses per connector: conn_anchor[conn_anchor_start[c] .. conn_anchor_start[c+1])
   std::vector<int32_t> conn_anchor_start, conn_anchor;
 

@@ -8,19 +8,28 @@ namespace divcoll::sim {
 void springs_forward(const Model& m, const double* x, const double* v, const double* o, double* F) {
   const Scene& sc = *m.scene;
   const double eps2 = sc.constants.eps_len * sc.constants.eps_len;
+  // the scene's arrays in locals: F may not alias them, so nothing is reloaded inside the loop
+  const int32_t* __restrict si = sc.spring_i.data();
+  const int32_t* __restrict sj = sc.spring_j.data();
+  const double* __restrict rest = sc.rest_length.data();
+  const double* __restrict amp = sc.amplitude.data();
+  const double* __restrict stiff = sc.stiffness.data();
+  const double* __restrict damp = sc.damping.data();
+  const bool dashpots = m.has_dashpots;
+  const int S = m.S;
   for (int q = 0; q < 2 * m.N; ++q) F[q] = 0;
-  for (int s = 0; s < m.S; ++s) {
-    const int i = sc.spring_i[s], j = sc.spring_j[s];
+  for (int s = 0; s < S; ++s) {
+    const int i = si[s], j = sj[s];
     // d = x_i − x_j, ℓ = sqrt(d·d + ε²), d̂ = d/ℓ
     const double dx = x[2 * i] - x[2 * j], dy = x[2 * i + 1] - x[2 * j + 1];
     const double l = std::sqrt(dx * dx + dy * dy + eps2);
     const double ux = dx / l, uy = dy / l;
     // f = −k (ℓ − L (1 + a o)) d̂ − c ((v_i − v_j)·d̂) d̂
-    const double e = l - sc.rest_length[s] * (1.0 + sc.amplitude[s] * o[s]);
-    double mag = -sc.stiffness[s] * e;
-    if (m.has_dashpots) {
+    const double e = l - rest[s] * (1.0 + amp[s] * o[s]);
+    double mag = -stiff[s] * e;
+    if (dashpots) {
       const double w = (v[2 * i] - v[2 * j]) * ux + (v[2 * i + 1] - v[2 * j + 1]) * uy;
-      mag -= sc.damping[s] * w;
+      mag -= damp[s] * w;
     }
     const double fx = mag * ux, fy = mag * uy;
     F[2 * i] += fx;

@@ -26,7 +26,7 @@ struct ControlBuffers {
 
 void control_forward(const Model& m, int t, const double* x, const double* v, const uint8_t* tau, double* o,
                      const ControlBuffers& buf);
-// ob: in ō'_t, out ō_t; adds into xb, vb, Lb, g_agent (A × P_a), g_conn (P_c); scratch as nn::backward
+// ob: in ō'_t, out ō_t; adds into xb, vb, Lb, g_agent (A × P_a; null: not wanted), g_conn (P_c); scratch as nn::backward
 // needs (max of agent and 5C connector scratch) plus 11 × 5C for the connector input gradient
 void control_adjoint(const Model& m, int t, const double* x, const double* v, const ControlBuffers& buf,
                      double* ob, double* xb, double* vb, double* Lb, double* g_agent, double* g_conn,

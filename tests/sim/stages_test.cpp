@@ -1,0 +1,239 @@
+// each stage of the step (sim/stages.hpp) on its own: its adjoint against central differences of
+// L = w · (the stage's outputs), w random, at a random state chosen away from branch changes — springs (with
+// dashpots), free velocity (with wind and adhesion), contact (floor with time of impact, sliding and sticking
+// friction, a resting mass, a wall, a belt, free masses; the branches are asserted) and control (agents and
+// connectors). Whole-rollout gradients are in gradient_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "collective/builders.hpp"
+#include "morph/body.hpp"
+#include "sim/model.hpp"
+#include "sim/stages.hpp"
+
+namespace divcoll {
+namespace {
+
+using Vec = std::vector<double>;
+
+// a pair scene with dashpots, wind, adhesion and a belt, and a random state
+struct StageState {
+  sim::Scene scene;
+  Vec x, v, o;
+  std::vector<uint8_t> tau;
+};
+
+StageState make_state(uint64_t seed) {
+  Rng rng = make_rng(seed, 3, 0);
+  collective::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
+  p.anchors = collective::compute_anchors(p, {}, 100);
+  a.anchors = collective::compute_anchors(a, {}, 100);
+  Vec conn = morph::init_connector_params(rng);
+  for (double& w : conn) w += 0.05 * normal(rng);  // nonzero biases: every term matters
+  StageState s;
+  s.scene = collective::pair_scene(p, a, conn, collective::kWeakConnector, "flat");
+  for (double& c : s.scene.damping) c = 5.0 + uniform01(rng);
+  s.scene.env.wind_amp = 1.5;
+  s.scene.env.adhesion = 2.0;
+  s.scene.env.belt_speed = 0.2;
+  s.scene.env.friction = 0.8;
+  s.scene.env.tangent_keep = 0.9;
+  const int N = s.scene.n_masses();
+  s.x = s.scene.x0;
+  for (int i = 0; i < N; ++i) s.x[2 * i] += 0.004 * normal(rng), s.x[2 * i + 1] += 0.05 + 0.004 * normal(rng);
+  s.v.resize(2 * N);
+  for (double& q : s.v) q = 0.3 * normal(rng);
+  s.o.resize(s.scene.n_springs());
+  for (double& q : s.o) q = 2 * uniform01(rng) - 1;
+  s.tau.resize(N);
+  for (auto& q : s.tau) q = uniform01(rng) < 0.5;
+  return s;
+}
+
+Vec random_weights(size_t n, uint64_t seed) {
+  Rng rng = make_rng(seed, 4, n);
+  Vec w(n);
+  for (double& q : w) q = normal(rng);
+  return w;
+}
+
+double dot(const Vec& a, const Vec& b) {
+  double s = 0;
+  for (size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+  return s;
+}
+
+// central difference of f along coordinate q of `in` (f reads `in`)
+double central(Vec& in, size_t q, double eps, const std::function<double()>& f) {
+  const double keep = in[q];
+  in[q] = keep + eps;
+  const double fp = f();
+  in[q] = keep - eps;
+  const double fm = f();
+  in[q] = keep;
+  return (fp - fm) / (2 * eps);
+}
+
+// every coordinate of `grad` against central differences of f w.r.t. `in`
+void expect_gradient(const char* what, const Vec& grad, Vec& in, double eps, double tol,
+                     const std::function<double()>& f, size_t stride = 1) {
+  ASSERT_EQ(grad.size(), in.size()) << what;
+  int checked = 0;
+  for (size_t q = 0; q < in.size(); q += stride) {
+    const double num = central(in, q, eps, f);
+    EXPECT_NEAR(grad[q], num, tol * std::max(1.0, std::abs(num))) << what << " [" << q << "]";
+    ++checked;
+  }
+  EXPECT_GT(checked, 0) << what;
+}
+
+TEST(StageAdjoint, SpringsMatchCentralDifferences) {
+  StageState s = make_state(1);
+  sim::Model m;
+  m.compile(s.scene, 1);
+  ASSERT_TRUE(m.has_dashpots);
+  const Vec wF = random_weights(s.x.size(), 11);
+  auto L = [&] {
+    Vec F(s.x.size());
+    sim::springs_forward(m, s.x.data(), s.v.data(), s.o.data(), F.data());
+    return dot(wF, F);
+  };
+  Vec xb(s.x.size(), 0.0), vb(s.v.size(), 0.0), ob(s.o.size(), 0.0), Lb(s.o.size(), 0.0);
+  sim::springs_adjoint(m, s.x.data(), s.v.data(), s.o.data(), wF.data(), xb.data(), vb.data(), ob.data(), Lb.data());
+  expect_gradient("x", xb, s.x, 1e-7, 1e-6, L);
+  expect_gradient("v", vb, s.v, 1e-6, 1e-6, L);
+  expect_gradient("o", ob, s.o, 1e-6, 1e-6, L);
+  expect_gradient("rest_length", Lb, s.scene.rest_length, 1e-8, 1e-6, L);
+}
+
+TEST(StageAdjoint, FreeVelocityMatchesCentralDifferences) {
+  StageState s = make_state(2);
+  sim::Model m;
+  m.compile(s.scene, 1);
+  ASSERT_TRUE(m.has_wind && m.has_adhesion);
+  const int t = 37;  // the wind is nonzero
+  Vec F = random_weights(s.x.size(), 21);
+  const Vec w = random_weights(s.x.size(), 22);
+  // two masses inside the adhesion band (flat ground at y = 0, band 0.01 u)
+  s.x[1] = 0.004;
+  s.x[3] = 0.007;
+  auto L = [&] {
+    Vec vp(s.x.size());
+    sim::velocity_forward(m, t, s.x.data(), s.v.data(), F.data(), vp.data());
+    return dot(w, vp);
+  };
+  Vec vp(s.x.size());
+  sim::velocity_forward(m, t, s.x.data(), s.v.data(), F.data(), vp.data());
+  EXPECT_LT(vp[1], m.decay * s.v[1] + m.h * (F[1] * m.inv_mass[0] + s.scene.env.gravity)) << "adhesion pulls mass 0";
+  Vec vb(s.v.size(), 0.0), Fb(F.size(), 0.0);
+  sim::velocity_adjoint(m, w.data(), vb.data(), Fb.data());
+  expect_gradient("v", vb, s.v, 1e-6, 1e-8, L);
+  expect_gradient("F", Fb, F, 1e-6, 1e-8, L);
+  // adhesion switches on a band, a step in x: no derivative w.r.t. x away from the band's edge
+  const Vec zero(s.x.size(), 0.0);
+  expect_gradient("x", zero, s.x, 1e-9, 1e-8, L);
+}
+
+TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
+  StageState s = make_state(3);
+  // terrain: a slope (so that n and the belt have two components), then a step up at x = 1 (a wall)
+  s.scene.env.terrain = {sim::Segment{-1.0, -0.1, 0.1}, sim::Segment{1.0, 0.3, 0.0}};
+  sim::Model m;
+  m.compile(s.scene, 1);
+  ASSERT_TRUE(m.has_walls && m.has_belt);
+  const double h = m.h;
+  auto floor_y = [](double x) { return -0.1 + 0.1 * (x + 1.0); };
+  // masses 0..4 placed on purpose, the rest free above the ground
+  const int N = s.scene.n_masses();
+  for (int i = 0; i < N; ++i) s.x[2 * i] = -0.5 + 0.05 * i, s.x[2 * i + 1] = floor_y(s.x[2 * i]) + 0.2;
+  auto place = [&](int i, double px, double above, double vx, double vy) {
+    s.x[2 * i] = px;
+    s.x[2 * i + 1] = floor_y(px) + above;
+    s.v[2 * i] = vx;
+    s.v[2 * i + 1] = vy;
+  };
+  place(0, 0.2, 0.001, 1.5, -0.5);    // floor, time of impact inside the step, sliding
+  place(1, 0.4, -0.0005, 0.8, -0.3);  // floor, already below (no time of impact), sliding
+  place(2, 0.6, 0.0005, 0.05, -1.0);  // floor, time of impact, sticking (friction projection off)
+  place(3, 0.995, 0.05, 2.0, 0.1);    // wall of the step at x = 1
+  place(4, 0.1, 0.001, 0.3, 0.5);     // above the floor, moving up: free
+  Vec& vp = s.v;                       // the stage's input velocity v'
+  const Vec wx = random_weights(s.x.size(), 31), wv = random_weights(s.x.size(), 32);
+  std::vector<sim::ContactRecord> rec(N);
+  auto run = [&](sim::ContactRecord* r) {
+    Vec xn(s.x.size()), vn(s.x.size());
+    std::vector<uint8_t> tn(N);
+    sim::contact_forward(m, s.x.data(), vp.data(), xn.data(), vn.data(), tn.data(), r);
+    return std::make_pair(xn, vn);
+  };
+  auto L = [&] {
+    auto [xn, vn] = run(nullptr);
+    return dot(wx, xn) + dot(wv, vn);
+  };
+  const auto [xn, vn] = run(rec.data());
+  // the branches asked for
+  EXPECT_EQ(rec[0].kind, 1);
+  EXPECT_TRUE(rec[0].toi_active && rec[0].friction_active);
+  EXPECT_EQ(rec[1].kind, 1);
+  EXPECT_TRUE(!rec[1].toi_active && rec[1].friction_active);
+  EXPECT_EQ(rec[2].kind, 1);
+  EXPECT_TRUE(rec[2].toi_active && !rec[2].friction_active);
+  EXPECT_EQ(rec[3].kind, 2);
+  EXPECT_TRUE(rec[3].toi_active);
+  EXPECT_EQ(rec[4].kind, 0);
+  EXPECT_NE(rec[0].b[0], 0.0) << "the belt moves the floor";
+  EXPECT_LT(rec[0].tstar, h);
+  Vec vpb(s.x.size(), 0.0), xb(s.x.size(), 0.0);
+  sim::contact_adjoint(m, vp.data(), vn.data(), rec.data(), wx.data(), wv.data(), vpb.data(), xb.data());
+  expect_gradient("x", xb, s.x, 1e-8, 1e-6, L);
+  expect_gradient("v'", vpb, vp, 1e-8, 1e-6, L);
+}
+
+TEST(StageAdjoint, ControlMatchesCentralDifferences) {
+  StageState s = make_state(4);
+  const int t = 123;
+  const Vec wo = random_weights(s.o.size(), 41);
+  const nn::Layout la = nn::agent_layout(sim::agent_input_size(s.scene.constants));
+  const nn::Layout lc = nn::connector_layout();
+  const int A = s.scene.n_agents(), cols = sim::kConnectorSprings * s.scene.n_connectors();
+  Vec agent_acts(static_cast<size_t>(A) * la.activation_count()), conn_acts(static_cast<size_t>(lc.activation_count()) * cols);
+  Vec o_in = s.o;
+  sim::Model m;
+  // the model packs the weights: recompiled for every evaluation, so that parameter perturbations count
+  auto L = [&] {
+    m.compile(s.scene, 1);
+    Vec o = o_in;
+    sim::control_forward(m, t, s.x.data(), s.v.data(), s.tau.data(), o.data(),
+                         sim::ControlBuffers{agent_acts.data(), conn_acts.data()});
+    return dot(wo, o);
+  };
+  L();
+  Vec ob = wo, xb(s.x.size(), 0.0), vb(s.v.size(), 0.0), Lb(s.o.size(), 0.0);
+  Vec ga(s.scene.agent_params.size(), 0.0), gc(s.scene.connector_params.size(), 0.0);
+  Vec scratch(std::max<size_t>(la.in() + la.scratch_count(),
+                               static_cast<size_t>(cols) * (1 + sim::kConnectorInputs + lc.scratch_count())));
+  sim::control_adjoint(m, t, s.x.data(), s.v.data(), sim::ControlBuffers{agent_acts.data(), conn_acts.data()},
+                       ob.data(), xb.data(), vb.data(), Lb.data(), ga.data(), gc.data(), scratch.data());
+  expect_gradient("x", xb, s.x, 1e-7, 1e-6, L);
+  expect_gradient("v", vb, s.v, 1e-6, 1e-6, L);
+  expect_gradient("o", ob, o_in, 1e-6, 1e-6, L);
+  expect_gradient("rest_length", Lb, s.scene.rest_length, 1e-8, 1e-6, L);
+  expect_gradient("agent_params", ga, s.scene.agent_params, 1e-6, 1e-6, L, 17);
+  expect_gradient("connector_params", gc, s.scene.connector_params, 1e-6, 1e-6, L, 7);
+
+  // without the agents' parameter gradient every other block is the same, bit for bit
+  L();
+  Vec ob2 = wo, xb2(s.x.size(), 0.0), vb2(s.v.size(), 0.0), Lb2(s.o.size(), 0.0), gc2(gc.size(), 0.0);
+  sim::control_adjoint(m, t, s.x.data(), s.v.data(), sim::ControlBuffers{agent_acts.data(), conn_acts.data()},
+                       ob2.data(), xb2.data(), vb2.data(), Lb2.data(), nullptr, gc2.data(), scratch.data());
+  EXPECT_EQ(xb2, xb);
+  EXPECT_EQ(vb2, vb);
+  EXPECT_EQ(ob2, ob);
+  EXPECT_EQ(Lb2, Lb);
+  EXPECT_EQ(gc2, gc);
+}
+
+}  // namespace
+}  // namespace divcoll
