@@ -17,7 +17,7 @@ fail() { echo "FAILED: $*"; exit 1; }
 CFG=$SRC/configs/tiny.toml
 BASE=('run.stages=["agents","connectors","deploy"]' 'connectors.kinds=["weak_uniform","weak_diverse"]')
 
-mpirun -np 2 "$D" run "$CFG" "${BASE[@]}" --out "$W/plain.h5" > /dev/null
+mpirun -np 2 "$D" run "$CFG" "${BASE[@]}" deploy.early_step=0 --out "$W/plain.h5" > /dev/null
 mpirun -np 2 "$D" run "$CFG" "${BASE[@]}" deploy.early_step=100 --out "$W/early.h5" > /dev/null
 mpirun -np 2 "$D" run "$CFG" "${BASE[@]}" deploy.episode_steps=100 --out "$W/short.h5" > /dev/null
 /usr/bin/python3 - "$W" <<'EOF' || fail "deploy.early_step"
