@@ -222,7 +222,7 @@ def draw(args) -> list:
     B = adversity_bars(adv, n_boot=args.boot, seed=args.boot_seed)
 
     fig = plt.figure(figsize=(17.0, 10.0))
-    gs = fig.add_gridspec(2, 4, width_ratios=[1.5, 1, 1, 1], left=0.05, right=0.99, top=0.86, bottom=0.21,
+    gs = fig.add_gridspec(2, 4, width_ratios=[1.5, 1, 1, 1], left=0.05, right=0.99, top=0.83, bottom=0.21,
                           wspace=0.12, hspace=0.55)
     ax_a = fig.add_subplot(gs[:, 0])
     panel_a(ax_a, adv, B)

@@ -337,14 +337,19 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
     clips = [Clip(rnd, r.simulate(rnd, train_steps), "a random agent, untrained"),
              Clip(evo, r.simulate(evo, train_steps), f"the fittest evolved agent (agent {best})",
                   stored_bl=float(r.final_fitness[best]))]
-    card = os.path.join(out_dir, "card1.mp4")
-    title_card(card, ["1. Agent optimisation", "evolution of bodies + gradient descent on controllers",
-                      f"{len(r.gen_best)} generations of {len(r.final_fitness)} agents ({name} preset)"], quick)
-    p1 = os.path.join(out_dir, "agent_optimisation.mp4")
-    render(p1, clips, f"Agent optimisation: before and after ({train_steps} steps on flat)", quick, every,
-           below=curve_strip(r.gen_best, "generation", "best fitness (BL)",
-                             "best fitness of each generation (red: played so far)"))
-    parts += [card, p1]
+    def part(k, card_lines, stem, heading, strip):
+        """a title card and the clips under a curve strip: [card path, part path]"""
+        card = os.path.join(out_dir, f"card{k}.mp4")
+        title_card(card, card_lines, quick)
+        path = os.path.join(out_dir, stem + ".mp4")
+        render(path, clips, heading, quick, every, below=curve_strip(*strip))
+        return [card, path]
+
+    parts += part(1, ["1. Agent optimisation", "evolution of bodies + gradient descent on controllers",
+                      f"{len(r.gen_best)} generations of {len(r.final_fitness)} agents ({name} preset)"],
+                  "agent_optimisation", f"Agent optimisation: before and after ({train_steps} steps on flat)",
+                  (r.gen_best, "generation", "best fitness (BL)", "best fitness of each generation (red: played so far)"))
+    p1 = parts[-1]
 
     # 2. connector optimisation
     conn_steps = int(r.cfg["connectors"]["episode_steps"])
@@ -356,14 +361,12 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
         f["connector_params"][...] = 0.0
     clips = [Clip(passive, r.simulate(passive, conn_steps), "diverse pair 0, passive connector (all weights 0)"),
              Clip(trained, r.simulate(trained, conn_steps), "the same pair, weak diverse-trained connector")]
-    card = os.path.join(out_dir, "card2.mp4")
-    title_card(card, ["2. Connector optimisation", "gradient descent through the simulator on the connector's weights",
-                      f"{len(r.curve)} iterations, agents frozen"], quick)
-    p2 = os.path.join(out_dir, "connector_optimisation.mp4")
-    render(p2, clips, f"Connector optimisation: untrained vs trained ({conn_steps} steps on flat)", quick, every,
-           below=curve_strip(r.curve, "training iteration", "mean batch travel (BL)",
-                             "weak diverse-trained connector: mean travel of the training batch"))
-    parts += [card, p2]
+    parts += part(2, ["2. Connector optimisation", "gradient descent through the simulator on the connector's weights",
+                      f"{len(r.curve)} iterations, agents frozen"],
+                  "connector_optimisation", f"Connector optimisation: untrained vs trained ({conn_steps} steps on flat)",
+                  (r.curve, "training iteration", "mean batch travel (BL)",
+                   "weak diverse-trained connector: mean travel of the training batch"))
+    p2 = parts[-1]
 
     # 3. deployment
     dep_steps = int(r.cfg["deploy"]["episode_steps"])

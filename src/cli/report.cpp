@@ -25,14 +25,15 @@ bool executable(const fs::path& p) {
   return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
 }
 
-// runs argv quietly (stdin, stdout and stderr to /dev/null); its exit status, or -1 when it could not start
-int run_quietly(const std::vector<std::string>& args) {
+// runs argv (with stdin, stdout and stderr to /dev/null when quiet) and waits; its exit status, or -1 when it
+// could not start
+int spawn(const std::vector<std::string>& args, bool quiet) {
   std::fflush(stdout);
   std::fflush(stderr);
   const pid_t pid = ::fork();
   if (pid < 0) return -1;
   if (pid == 0) {
-    const int null = ::open("/dev/null", O_RDWR);
+    const int null = quiet ? ::open("/dev/null", O_RDWR) : -1;
     if (null >= 0) {
       ::dup2(null, 0);
       ::dup2(null, 1);
@@ -50,7 +51,7 @@ int run_quietly(const std::vector<std::string>& args) {
 }
 
 bool has_modules(const fs::path& python) {
-  return run_quietly({python.string(), "-c", "import numpy, h5py, matplotlib"}) == 0;
+  return spawn({python.string(), "-c", "import numpy, h5py, matplotlib"}, /*quiet=*/true) == 0;
 }
 }  // namespace
 
@@ -122,21 +123,7 @@ int exec_python(const std::string& script, const std::vector<std::string>& args)
 }
 
 int run_python(const std::string& script, const std::vector<std::string>& args) {
-  std::vector<std::string> cmd = python_command(script, args, true);
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const pid_t pid = ::fork();
-  if (pid < 0) return -1;
-  if (pid == 0) {
-    std::vector<char*> argv;
-    for (auto& s : cmd) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  if (::waitpid(pid, &status, 0) < 0) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return spawn(python_command(script, args, true), /*quiet=*/false);
 }
 
 int report(const ReportArgs& a) {

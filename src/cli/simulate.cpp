@@ -28,6 +28,20 @@ void check_output_path(const std::string& path, bool force) {
   DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "output folder " << parent.string() << " does not exist");
 }
 
+// the trajectory file's content for a simulated scene (without gradients)
+io::Trajectory trajectory_of(const sim::Scene& scene, const sim::RunResult& r, int steps) {
+  io::Trajectory t;
+  t.steps = steps;
+  t.n_masses = scene.n_masses();
+  t.n_agents = scene.n_agents();
+  t.x = r.x;
+  t.v = r.v;
+  t.touch = r.touch;
+  t.travel = r.travel;
+  t.status = sim::status_name(r.status);
+  return t;
+}
+
 int simulate(const SimulateArgs& a) {
   check_output_path(a.out, a.force);
   const sim::Scene scene = io::read_scene(a.scene);
@@ -37,15 +51,7 @@ int simulate(const SimulateArgs& a) {
   opt.record = true;
   const sim::RunResult r = sim::simulate(scene, opt);
 
-  io::Trajectory t;
-  t.steps = a.steps;
-  t.n_masses = scene.n_masses();
-  t.n_agents = scene.n_agents();
-  t.x = r.x;
-  t.v = r.v;
-  t.touch = r.touch;
-  t.travel = r.travel;
-  t.status = sim::status_name(r.status);
+  io::Trajectory t = trajectory_of(scene, r, a.steps);
   t.has_grad = a.grad;
   if (a.grad) {
     t.grad_agent_params = r.grad_agent_params;
@@ -103,20 +109,6 @@ int scene(const SceneArgs& a) {
 }
 
 namespace {
-// a trajectory file of a simulated scene
-void write_traj(const std::string& path, const sim::Scene& scene, const sim::RunResult& r, int steps) {
-  io::Trajectory t;
-  t.steps = steps;
-  t.n_masses = scene.n_masses();
-  t.n_agents = scene.n_agents();
-  t.x = r.x;
-  t.v = r.v;
-  t.touch = r.touch;
-  t.travel = r.travel;
-  t.status = sim::status_name(r.status);
-  io::write_trajectory(path, t, /*overwrite=*/true);
-}
-
 // the pair of the run's weak diverse-trained connector (replicate 0) whose travel on flat is the median of
 // the ok pairs: a typical pair, not the best one
 int median_pair(const std::string& run, int* n_ok, double* median_bl) {
@@ -180,19 +172,22 @@ int demo(const DemoArgs& a) {
       DIVCOLL_THROW_UNLESS(e < static_cast<int>(envs.size()), a.run << " has no deployment in " << env);
       io::h5::Dims d;
       const std::vector<double> bl = f.read<double>("deploy/collectives/travel_bl", &d);
-      const double stored = bl[((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q];
+      const size_t at = ((static_cast<size_t>(e) * d[1] + t) * d[2] + 0) * d[3] + q;
+      const double stored = bl[at];
+      const double stored_u = f.read<double>("deploy/collectives/travel_u")[at];
       const sim::Scene s = io::read_scene(ex.out);
       sim::RunOptions opt;
       opt.steps = cfg.deploy.episode_steps;
       opt.record = true;
       const sim::RunResult r = sim::simulate(s, opt);
       const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
-      write_traj(traj, s, r, opt.steps);
+      io::write_trajectory(traj, trajectory_of(s, r, opt.steps), /*overwrite=*/true);
       const double got = r.travel / sim::mean_body_length(s);
       char row[512];
       std::snprintf(row, sizeof row, "%-12s %10.4f %10.4f %10s %16.4f  %s%s\n", env.c_str(), r.travel, got,
                     sim::status_name(r.status), stored, traj.c_str(),
-                    (std::isnan(stored) && std::isnan(got)) || stored == got ? "" : "  (differs from the run file!)");
+                    (std::isnan(stored_u) && std::isnan(r.travel)) || stored_u == r.travel ? ""
+                                                                                : "  (differs from the run file!)");
       rows.push_back(row);
       episodes.emplace_back(ex.out, traj);
     }
@@ -217,7 +212,7 @@ int demo(const DemoArgs& a) {
       opt.record = true;
       const sim::RunResult r = sim::simulate(s, opt);
       const std::string traj = (fs::path(a.out) / ("pair_" + env + "_traj.h5")).string();
-      write_traj(traj, s, r, opt.steps);
+      io::write_trajectory(traj, trajectory_of(s, r, opt.steps), /*overwrite=*/true);
       std::printf("%-12s %10.4f %10.4f %10s  %s\n", env.c_str(), r.travel, r.travel / sim::mean_body_length(s),
                   sim::status_name(r.status), path.c_str());
       episodes.emplace_back(path, traj);

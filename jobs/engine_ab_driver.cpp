@@ -1,0 +1,48 @@
+// A/B driver for the engine (README "Engine speed-up"): the same fixed work through one build's engine,
+// timed by the thread's CPU time, so that two builds can be compared on a busy machine. Not built by CMake.
+//   g++ -std=c++20 -O3 -march=native -ffp-contract=off [-DHAS_AGRAD] -I TREE/src -I TREE jobs/engine_ab_driver.cpp
+//       TREE/build/libdivcoll_core.a -o ab -ltomlplusplus -lboost_serialization
+//   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20; HAS_AGRAD for trees that
+//   have RunOptions::agent_param_grad) prints scene-steps per CPU second, CPU seconds and a checksum
+#include <cstdio>
+#include <ctime>
+#include <cstdlib>
+#include <string>
+#include <vector>
+#include "collective/builders.hpp"
+#include "morph/body.hpp"
+#include "sim/engine.hpp"
+using namespace divcoll;
+int main(int argc, char** argv) {
+  const std::string kind = argv[1];
+  const int batch = atoi(argv[2]), steps = atoi(argv[3]), grad = atoi(argv[4]), agrad = atoi(argv[5]), reps = atoi(argv[6]);
+  std::vector<collective::Agent> agents;
+  Rng rng(seed_for(7, 99, 0));
+  for (int q = 0; q < 24; ++q) {
+    agents.push_back(collective::random_agent(rng));
+    agents.back().anchors = collective::compute_anchors(agents.back(), {}, 300);
+  }
+  auto conn = morph::init_connector_params(rng);
+  std::vector<sim::Scene> scenes;
+  for (int b = 0; b < batch; ++b) {
+    if (kind == "agent") scenes.push_back(collective::agent_scene(agents[b % 24], "flat", {}));
+    else if (kind == "pair") scenes.push_back(collective::pair_scene(agents[b % 24], agents[(b + 1) % 24], conn, collective::kWeakConnector, "flat", {}));
+    else { std::vector<const collective::Agent*> ch; for (int q = 0; q < 20; ++q) ch.push_back(&agents[(b + q) % 24]);
+      scenes.push_back(collective::chain_scene(ch, conn, collective::kWeakConnector, "flat", {})); }
+  }
+  sim::Simulator sim;
+  sim::RunOptions opt; opt.steps = steps; opt.grad = grad;
+#ifdef HAS_AGRAD
+  opt.agent_param_grad = agrad;
+#else
+  (void)agrad;
+#endif
+  double s = 0;
+  sim.run_batch({scenes.front()}, opt);
+  timespec t0, t1;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+  for (int r = 0; r < reps; ++r) for (auto& res : sim.run_batch(scenes, opt)) s += res.travel + (grad && !res.grad_connector_params.empty() ? res.grad_connector_params[0] : 0);
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+  const double cpu = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
+  std::printf("%.0f %.4f %.17g\n", double(reps) * batch * steps / cpu, cpu, s);
+}
