@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/check.hpp"
+#include "io/run_read.hpp"
 #include "morph/body.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
@@ -89,51 +90,6 @@ void write_pool(MPI_Comm comm, const io::h5::Node& file, const std::string& g, c
   file.write_rows<uint8_t>(g + "/survived", {M}, master_rows, surv);
 }
 
-// reads every row of a pool group (rank-local)
-std::vector<evo::Individual> read_pool(const io::h5::Node& file, const std::string& g, std::vector<uint8_t>* survived) {
-  Dims d;
-  const auto id = file.read<int64_t>(g + "/id", &d);
-  const size_t M = d[0];
-  const auto parent = file.read<int64_t>(g + "/parent");
-  const auto cells = file.read<int64_t>(g + "/cells");
-  const auto springs = file.read<int64_t>(g + "/springs");
-  const auto rest_pos = file.read<double>(g + "/rest_pos");
-  const auto si = file.read<int32_t>(g + "/spring_i");
-  const auto sj = file.read<int32_t>(g + "/spring_j");
-  const auto rl = file.read<double>(g + "/rest_length");
-  const auto amp = file.read<double>(g + "/amplitude");
-  Dims pd;
-  const auto params = file.read<double>(g + "/params", &pd);
-  const auto fit = file.read<double>(g + "/fitness");
-  const auto trav = file.read<double>(g + "/travel_u");
-  const auto status = file.read<uint8_t>(g + "/status");
-  const auto desc = file.read<double>(g + "/descriptor");
-  Dims cd;
-  const auto curve = file.read<double>(g + "/curve_u", &cd);
-  if (survived) *survived = file.read<uint8_t>(g + "/survived");
-  std::vector<evo::Individual> out(M);
-  const size_t P = pd[1], C = cd[1];
-  for (size_t i = 0; i < M; ++i) {
-    evo::Individual& x = out[i];
-    x.id = id[i];
-    x.parent = parent[i];
-    x.agent.cells = static_cast<uint32_t>(cells[i]);
-    x.agent.springs = static_cast<uint32_t>(springs[i]);
-    x.agent.rest_pos.assign(rest_pos.begin() + i * 2 * M11, rest_pos.begin() + (i + 1) * 2 * M11);
-    x.agent.spring_i.assign(si.begin() + i * S21, si.begin() + (i + 1) * S21);
-    x.agent.spring_j.assign(sj.begin() + i * S21, sj.begin() + (i + 1) * S21);
-    x.agent.rest_length.assign(rl.begin() + i * S21, rl.begin() + (i + 1) * S21);
-    x.agent.amplitude.assign(amp.begin() + i * S21, amp.begin() + (i + 1) * S21);
-    x.agent.params.assign(params.begin() + i * P, params.begin() + (i + 1) * P);
-    x.train.fitness_bl = fit[i];
-    x.train.travel_u = trav[i];
-    x.train.status = static_cast<sim::Status>(status[i]);
-    x.train.curve_u.assign(curve.begin() + i * C, curve.begin() + (i + 1) * C);
-    for (int q = 0; q < morph::kDescriptorSize; ++q) x.descriptor[q] = desc[i * morph::kDescriptorSize + q];
-  }
-  return out;
-}
-
 std::string gen_name(const std::string& group, int g) {
   char b[32];
   std::snprintf(b, sizeof b, "/gen_%03d", g);
@@ -161,12 +117,6 @@ Summary summarize(const std::vector<evo::Individual>& pop) {
 }
 
 }  // namespace
-
-std::vector<evo::Individual> read_final_population(const io::h5::Node& file, const std::string& group) {
-  DIVCOLL_THROW_UNLESS(file.has(group + "/final"),
-                       file.file() << " has no " << group << "/final: its agents stage has not finished");
-  return read_pool(file, group + "/final", nullptr);
-}
 
 void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint) {
@@ -219,7 +169,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   std::vector<evo::Individual> population;
   if (done > 0 && rank == 0) {
     std::vector<uint8_t> survived;
-    const auto pool = read_pool(file, gen_name(G, static_cast<int>(done) - 1), &survived);
+    const auto pool = io::read_pool(file, gen_name(G, static_cast<int>(done) - 1), &survived);
     for (size_t i = 0; i < pool.size(); ++i)
       if (survived[i]) population.push_back(pool[i]);
     DIVCOLL_THROW_UNLESS(static_cast<int>(population.size()) == P,

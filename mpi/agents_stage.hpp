@@ -25,11 +25,12 @@
 #include "evo/evolution.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
-inline constexpr uint64_t kAgentsStage = 1000;
+inline constexpr uint64_t kAgentsStage = io::stage_stream("agents");
 
 // where and how a population is evolved: the main one (defaults) or a graded-diversity one (SPEC §7.5)
 struct AgentsSpec {
@@ -47,8 +48,5 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
 // called (collectively) after every output.checkpoint_every generations and at the end of the stage.
 void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint);
-
-// the final population of a run file's agents stage (rank-local read)
-std::vector<evo::Individual> read_final_population(const io::h5::Node& file, const std::string& group = "agents");
 
 }  // namespace divcoll::mpi

@@ -14,6 +14,7 @@
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/run_read.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
 #include "mpi/protocol.hpp"
@@ -112,7 +113,6 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   const auto& D = cfg.deploy;
   const std::vector<std::string>& envs = D.environments;
   const int E = static_cast<int>(envs.size()), NP = D.pairs, R = cfg.connectors.replicates;
-  const int Pc = sim::connector_param_count();
   DIVCOLL_THROW_UNLESS(file.has("deploy") && file.group("deploy").has_attribute("status") &&
                            file.group("deploy").read_string("status") == "complete",
                        file.file() << ": the analysis stage needs a complete deploy stage");
@@ -131,10 +131,9 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
                                                                   " include weak_uniform and weak_diverse");
     type_index[t] = static_cast<int>(it - deploy_types.begin());
     const std::string kind = kTypes[t].substr(0, kTypes[t].find('@'));
-    const std::vector<double> w = file.read<double>("connectors/" + kind + "/params");
-    for (int r = 0; r < R; ++r) weights[t].emplace_back(w.begin() + r * Pc, w.begin() + (r + 1) * Pc);
+    weights[t] = io::read_weights(file, "connectors/" + kind, R);
   }
-  const double stiffness = cfg.connectors.weak_stiffness;
+  const double stiffness = io::strength_stiffness(cfg, "weak");
   std::vector<std::pair<int, int>> pairs[2];
   pairs[0] = collective::deploy_uniform_pairs(cfg);
   {

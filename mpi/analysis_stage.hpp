@@ -45,10 +45,11 @@
 
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
-inline constexpr uint64_t kAnalysisStage = 6000;
+inline constexpr uint64_t kAnalysisStage = io::stage_stream("analysis");
 
 void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                         const std::function<void()>& checkpoint);

@@ -5,10 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numeric>
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "morph/body.hpp"
+#include "evo/optim.hpp"
+#include "io/run_read.hpp"
 #include "mpi/agents_stage.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
@@ -49,12 +52,18 @@ void bcast_doubles(MPI_Comm comm, std::vector<double>& v) {
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file, const std::string& group) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
+  // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
+  // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
+  const bool stored = group == "agents" && file.has(kAnchors);
   std::vector<collective::Agent> agents;
-  if (rank == 0)
-    for (const evo::Individual& x : read_final_population(file, group)) agents.push_back(x.agent);
+  if (rank == 0) {
+    for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
+    if (stored) io::read_anchors(file, kAnchors, agents);
+  }
   agents = broadcast(comm, agents);
-  // anchors from each agent's own 1000-step run on flat: the same on every rank
-  for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+  // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
+  if (!stored)
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a);
   return agents;
 }
 
@@ -81,18 +90,14 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
   // state: weights and Adam moments of every slot
   int done = stage.has_attribute("iterations_done") ? static_cast<int>(stage.read_int("iterations_done")) : 0;
   std::vector<std::vector<double>> params(N);
-  std::vector<collective::Adam> adam(N);
+  std::vector<evo::Adam> adam(N);
   const std::string sg = spec.state_group + "/state/";
   if (rank == 0) {
     if (done > 0) {
-      const auto p = file.read<double>(sg + "params");
-      const auto m = file.read<double>(sg + "adam_m");
-      const auto v = file.read<double>(sg + "adam_v");
-      for (int c = 0; c < N; ++c) {
-        params[c].assign(p.begin() + c * Pc, p.begin() + (c + 1) * Pc);
-        adam[c].m.assign(m.begin() + c * Pc, m.begin() + (c + 1) * Pc);
-        adam[c].v.assign(v.begin() + c * Pc, v.begin() + (c + 1) * Pc);
-      }
+      params = io::split_weights(file.read<double>(sg + "params"), N);
+      const auto m = io::split_weights(file.read<double>(sg + "adam_m"), N);
+      const auto v = io::split_weights(file.read<double>(sg + "adam_v"), N);
+      for (int c = 0; c < N; ++c) adam[c].m = m[c], adam[c].v = v[c];
       std::printf("%s: resuming after iteration %d\n", spec.label.c_str(), done);
     } else {
       for (int c = 0; c < N; ++c) {
@@ -107,13 +112,11 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
   auto write_state = [&] {
     std::vector<int64_t> rows;
     std::vector<double> p, m, v;
-    if (rank == 0)
-      for (int c = 0; c < N; ++c) {
-        rows.push_back(c);
-        p.insert(p.end(), params[c].begin(), params[c].end());
-        m.insert(m.end(), adam[c].m.begin(), adam[c].m.end());
-        v.insert(v.end(), adam[c].v.begin(), adam[c].v.end());
-      }
+    if (rank == 0) {
+      std::vector<std::vector<double>> ms, vs;
+      for (int c = 0; c < N; ++c) rows.push_back(c), ms.push_back(adam[c].m), vs.push_back(adam[c].v);
+      p = io::join_weights(params), m = io::join_weights(ms), v = io::join_weights(vs);
+    }
     const Dims d = {static_cast<hsize_t>(N), static_cast<hsize_t>(Pc)};
     file.write_rows<double>(sg + "params", d, rows, p);
     file.write_rows<double>(sg + "adam_m", d, rows, m);
@@ -137,8 +140,7 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
   for (int it = done; it < I; ++it) {
     const auto t0 = std::chrono::steady_clock::now();
     flat_params.clear();
-    if (rank == 0)
-      for (const auto& p : params) flat_params.insert(flat_params.end(), p.begin(), p.end());
+    if (rank == 0) flat_params = io::join_weights(params);
     bcast_doubles(comm, flat_params);
     // this iteration's batches: uniform slots use agent i with its clone, diverse ones fresh random pairs
     std::vector<std::string> items;
@@ -185,7 +187,7 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
         if (C.optimizer == "adam")
           adam[c].step(params[c], g[c], C.lr, C.clip_norm, it + 1);
         else
-          collective::normalized_step(params[c], g[c], C.lr);
+          evo::normalized_step(params[c], g[c], C.lr);
       }
     }
     // curves: row `it` of each group's (I × columns) datasets
@@ -261,23 +263,18 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   stage.write_string("status", "running");
   stage.write_string("kinds", join(kinds));
   stage.write_int("replicates", R);
-  if (!file.has("connectors/anchors")) {
-    std::vector<int64_t> rows;
-    std::vector<int32_t> an;
-    if (rank == 0)
-      for (int i = 0; i < pop; ++i) {
-        rows.push_back(i);
-        const auto& x = agents[i].anchors;
-        an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
-      }
-    file.write_rows<int32_t>("connectors/anchors", {static_cast<hsize_t>(pop), 4}, rows, an);
+  if (!file.has(kAnchors)) {
+    std::vector<int64_t> rows(pop);
+    std::iota(rows.begin(), rows.end(), 0);
+    if (rank != 0) rows.clear();
+    file.write_rows<int32_t>(kAnchors, {static_cast<hsize_t>(pop), 4}, rows,
+                             rank == 0 ? io::anchors_rows(agents) : std::vector<int32_t>{});
   }
   // connector c = kind·R + replicate, trained on flat
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::kind_is_weak(kinds[k]) ? C.weak_stiffness : C.strong_stiffness,
-                       collective::kind_is_diverse(kinds[k]), "flat", kConnectorsStage + k * R + r,
+      slots.push_back({io::stiffness(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);

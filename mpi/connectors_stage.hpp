@@ -20,12 +20,16 @@
 #include "collective/builders.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
-inline constexpr uint64_t kConnectorsStage = 2000;
+inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
+// where the main population's anchors are stored (written by this stage, read by every later one)
+inline constexpr const char* kAnchors = "connectors/anchors";
 
-// the final agent population of the run file on every rank, with anchors computed (deterministically)
+// the final agent population of the run file on every rank, with its anchors: the stored ones for the main
+// population once the connectors stage wrote them, otherwise computed (deterministically)
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file,
                                                const std::string& group = "agents");
 

@@ -9,6 +9,7 @@
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/run_read.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
@@ -49,7 +50,7 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   const int E = static_cast<int>(envs.size()), NP = D.pairs;
   const std::vector<collective::Agent> agents = load_population(comm, file);
   const int pop = static_cast<int>(agents.size());
-  const int R = cfg.connectors.replicates, Pc = sim::connector_param_count();
+  const int R = cfg.connectors.replicates;
 
   // the collective types: every trained kind on uniform and on diverse pairs
   std::vector<std::string> types;
@@ -59,13 +60,11 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   for (const std::string& kind : cfg.connectors.kinds) {
     DIVCOLL_THROW_UNLESS(file.has("connectors/" + kind + "/params"),
                          file.file() << " has no trained " << kind << " connectors: run the connectors stage first");
-    const std::vector<double> w = file.read<double>("connectors/" + kind + "/params");
-    std::vector<std::vector<double>> reps;
-    for (int r = 0; r < R; ++r) reps.emplace_back(w.begin() + r * Pc, w.begin() + (r + 1) * Pc);
+    const std::vector<std::vector<double>> reps = io::read_weights(file, "connectors/" + kind, R);
     for (const char* dep : {"uniform", "diverse"}) {
       types.push_back(kind + "@" + dep);
       weights.push_back(reps);
-      stiffness.push_back(collective::kind_is_weak(kind) ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness);
+      stiffness.push_back(io::stiffness(cfg, kind));
       diverse.push_back(std::string(dep) == "diverse");
     }
   }

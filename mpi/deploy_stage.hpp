@@ -22,10 +22,11 @@
 
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
-inline constexpr uint64_t kDeployStage = 3000;
+inline constexpr uint64_t kDeployStage = io::stage_stream("deploy");
 
 void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint);

@@ -8,6 +8,7 @@
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/run_read.hpp"
 #include "mpi/agents_stage.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
@@ -44,16 +45,6 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
   for (int k = 0; k < n; ++k) std::swap(idx[k], idx[k + uniform_int(rng, population - k)]);
   idx.resize(n);
   return idx;
-}
-
-// the connector weights of one kind, (replicates × P_c), from the run file
-std::vector<std::vector<double>> read_weights(const io::h5::File& file, const std::string& group, int replicates) {
-  const int Pc = sim::connector_param_count();
-  DIVCOLL_THROW_UNLESS(file.has(group + "/params"), file.file() << " has no " << group << "/params: run the stage that trains them first");
-  const std::vector<double> w = file.read<double>(group + "/params", Dims{static_cast<hsize_t>(replicates), static_cast<hsize_t>(Pc)});
-  std::vector<std::vector<double>> out;
-  for (int r = 0; r < replicates; ++r) out.emplace_back(w.begin() + r * Pc, w.begin() + (r + 1) * Pc);
-  return out;
 }
 
 // farms pair (or, with `chains`, heap-order chain) episodes, forward only, and returns their outcomes on rank 0
@@ -116,7 +107,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   std::vector<ConnectorSlot> slots;
   for (int e = 0; e < E; ++e)
     for (int r = 0; r < R; ++r)
-      slots.push_back({cfg.connectors.weak_stiffness, true, envs[e], kSpecialistsStage + e * R + r,
+      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
                        "specialists/" + envs[e], r});
   TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
@@ -131,7 +122,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
         for (const auto& [a, b] : pairs) eps.push_back({e * R + r, e, {a, b}});
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<EpisodeDone> d =
-      run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, cfg.deploy.episode_steps, false);
+      run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
   std::vector<int64_t> rows;
   std::vector<double> tu, tb;
   std::vector<uint8_t> st;
@@ -175,8 +166,8 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
   const std::vector<collective::Agent> agents = load_population(comm, file);
   const int pop = static_cast<int>(agents.size());
   // weights 0..R−1: weak uniform-trained; R..2R−1: weak diverse-trained
-  std::vector<std::vector<double>> weights = read_weights(file, "connectors/weak_uniform", R);
-  for (auto& w : read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
+  std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
+  for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
 
   if (!file.has("scaling")) file.create_group("scaling");
   io::h5::Node stage = file.group("scaling");
@@ -218,7 +209,7 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
           for (int r = 0; r < R; ++r)
             for (int q = 0; q < D; ++q) eps.push_back({v * R + r, ei, chains[si * 2 + v][static_cast<size_t>(r) * D + q]});
     const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, Sc.episode_steps, true);
+        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_uniform"), envs, Sc.episode_steps, true);
     std::vector<int64_t> rows;
     std::vector<double> tu, tb;
     std::vector<uint8_t> st;
@@ -267,7 +258,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   // genotype among its agents of that body
   uint32_t shape = 0, springs = 0;
   {
-    const auto main = read_final_population(file);
+    const auto main = io::read_final_population(file);
     std::map<uint32_t, int> bodies;
     for (const auto& x : main) ++bodies[x.agent.cells];
     int best = -1;
@@ -320,7 +311,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
     std::vector<ConnectorSlot> slots;
     for (int r = 0; r < R; ++r)
-      slots.push_back({cfg.connectors.weak_stiffness, true, "flat", kGradedStage + 100000 * v + 50000 + r,
+      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
                        base + "/connectors/weak_diverse", r});
     TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
                  cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
@@ -345,7 +336,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
           for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
     }
     const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, cfg.connectors.weak_stiffness, envs, cfg.deploy.episode_steps, false);
+        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
     std::vector<int64_t> rows;
     std::vector<double> au, ab, pu, pb;
     std::vector<uint8_t> as, ps;

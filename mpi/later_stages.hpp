@@ -7,12 +7,13 @@
 
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::mpi {
 
-inline constexpr uint64_t kSpecialistsStage = 4000;
-inline constexpr uint64_t kScalingStage = 5000;
-inline constexpr uint64_t kGradedStage = 1000000;
+inline constexpr uint64_t kSpecialistsStage = io::stage_stream("specialists");
+inline constexpr uint64_t kScalingStage = io::stage_stream("scaling");
+inline constexpr uint64_t kGradedStage = io::stage_stream("graded");
 
 // Run file, group /specialists (attributes status, environments = the novel ones, replicates):
 //   <env>/params (R × P_c), <env>/curve_u, curve_bl, nan_pairs (I × R)   as in /connectors

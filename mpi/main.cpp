@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
   c->add_option("--seed", sc.seed, "random seed for agents and connector");
   c->add_option("--connector", sc.connector, "weak or strong")->check(CLI::IsMember({"weak", "strong"}));
   c->add_flag("--uniform", sc.uniform, "clones of one agent instead of different agents");
+  c->add_option("--config", sc.config, "run config whose connector stiffness to use (default: the paper's)")
+      ->check(CLI::ExistingFile);
   c->add_flag("--force", sc.force, "overwrite an existing output file");
 
   cli::ExportArgs ex;
@@ -77,6 +79,8 @@ int main(int argc, char** argv) {
   auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
   b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
   b->add_flag("--quick", bench.quick, "fewer rows");
+  b->add_option("--config", bench.config, "run config whose weak connector stiffness to use (default: the paper's)")
+      ->check(CLI::ExistingFile);
 
   mpi::BenchFarmArgs bf;
   auto* bfc = app.add_subcommand("bench-farm", "the task farm's master alone: cost per item at any rank count (MPI)");

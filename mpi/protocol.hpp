@@ -24,6 +24,7 @@
 #include "collective/builders.hpp"
 #include "evo/evolution.hpp"
 #include "evo/gd.hpp"
+#include "io/run_read.hpp"
 
 namespace divcoll::mpi {
 
@@ -75,19 +76,9 @@ void serialize(Ar& ar, EpisodeDone& d, unsigned) {
   ar & d.travel_u & d.travel_bl & d.status;
 }
 
-// names as one comma-separated attribute value
-inline std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
-}
-// the names of such an attribute value
-inline std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string x; std::getline(ss, x, ',');) out.push_back(x);
-  return out;
-}
+// the name lists of stage attributes (io/run_read.hpp)
+using io::join;
+using io::split;
 
 }  // namespace divcoll::mpi
 

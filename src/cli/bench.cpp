@@ -8,6 +8,7 @@
 #include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
+#include "io/pipeline.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
 
@@ -19,6 +20,7 @@ using Clock = std::chrono::steady_clock;
 struct Fixture {
   std::vector<collective::Agent> agents;
   std::vector<double> conn;
+  double stiffness = 0;  // of the weak connector, from the config
 };
 
 Fixture make_fixture(int n_agents, uint64_t seed) {
@@ -37,10 +39,10 @@ sim::Scene make_scene(const Fixture& f, const std::string& kind, int b, const si
   const int n = static_cast<int>(f.agents.size());
   if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", c);
   if (kind == "pair")
-    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, collective::kWeakConnector, "flat", c);
+    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.stiffness, "flat", c);
   std::vector<const collective::Agent*> chain;
   for (int q = 0; q < 20; ++q) chain.push_back(&f.agents[(b + q) % n]);
-  return collective::chain_scene(chain, f.conn, collective::kWeakConnector, "flat", c);
+  return collective::chain_scene(chain, f.conn, f.stiffness, "flat", c);
 }
 
 // runs batches until `seconds` have passed; returns scene-steps per second
@@ -69,7 +71,8 @@ double time_batch(sim::Simulator& sim, const std::vector<sim::Scene>& batch, int
 int bench(const BenchArgs& a) {
   std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
               divcoll::git_commit());
-  const Fixture f = make_fixture(24, 7);
+  Fixture f = make_fixture(24, 7);
+  f.stiffness = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config), "weak");
 
   // ---- throughput --------------------------------------------------------------------------------
   std::printf("## Throughput: scene-steps per second per core\n\n");

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace divcoll::cli {
@@ -17,9 +19,10 @@ struct SimulateArgs {
 int simulate(const SimulateArgs& a);
 
 // divcoll scene --kind agent|pair|chain --env NAME --out S.h5 [--agents N] [--seed S] [--connector weak|strong]
-//               [--uniform] [--force]
+//               [--uniform] [--config RUN.toml] [--force]
 struct SceneArgs {
   std::string kind = "pair", env = "flat", out, connector = "weak";
+  std::string config;  // the connector stiffness comes from this config's [connectors] (default: the paper's)
   int agents = 2;
   uint64_t seed = 1;
   bool uniform = false;
@@ -74,6 +77,7 @@ int run_python(const std::string& script, const std::vector<std::string>& args);
 struct BenchArgs {
   double seconds = 0.5;  // minimum timed wall time per row
   bool quick = false;    // fewer rows
+  std::string config;    // the connector stiffness comes from this config's [connectors] (default: the paper's)
 };
 int bench(const BenchArgs& a);
 
@@ -86,6 +90,10 @@ int gd_compare(const GdCompareArgs& a);
 
 // divcoll compare A B: 0 if every dataset is bit-identical, 1 if not
 int compare(const std::string& a, const std::string& b);
+// every dataset of a file: path → (dims, raw bytes in the file's own type); attributes are left out
+std::map<std::string, std::pair<std::vector<unsigned long long>, std::string>> datasets(const std::string& path);
+// one 64-bit digest (FNV-1a, hex) of every dataset's path, shape and bytes, in path order
+std::string datasets_digest(const std::string& path);
 
 // divcoll schema [--check RUN.h5]: the run-file schema as markdown (the README's tables), or a run file's
 // disagreements with it (0 none, 1 some)

@@ -12,9 +12,7 @@
 #include "io/h5.hpp"
 
 namespace divcoll::cli {
-namespace {
 
-// every dataset of a file: path → (dims, raw bytes in the file's own type)
 std::map<std::string, std::pair<std::vector<hsize_t>, std::string>> datasets(const std::string& path) {
   io::h5::File f = io::h5::File::open(path);
   std::map<std::string, std::pair<std::vector<hsize_t>, std::string>> out;
@@ -38,7 +36,26 @@ std::map<std::string, std::pair<std::vector<hsize_t>, std::string>> datasets(con
   return out;
 }
 
-}  // namespace
+std::string datasets_digest(const std::string& path) {
+  uint64_t h = 14695981039346656037ull;  // FNV-1a, 64 bits
+  auto feed = [&](const void* p, size_t n) {
+    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  const auto all = datasets(path);
+  for (const auto& [name, v] : all) {
+    feed(name.c_str(), name.size() + 1);
+    const uint64_t rank = v.first.size();
+    feed(&rank, sizeof rank);
+    for (hsize_t d : v.first) {
+      const uint64_t x = d;
+      feed(&x, sizeof x);
+    }
+    feed(v.second.data(), v.second.size());
+  }
+  char out[64];
+  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+  return out;
+}
 
 int compare(const std::string& a, const std::string& b) {
   const auto A = datasets(a), B = datasets(b);

@@ -10,15 +10,15 @@
 #include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/config.hpp"
+#include "io/pipeline.hpp"
 #include "io/h5.hpp"
+#include "io/run_read.hpp"
 #include "io/scene_file.hpp"
-#include "mpi/agents_stage.hpp"
-#include "mpi/protocol.hpp"
 
 namespace divcoll::cli {
 namespace {
 
-using mpi::split;
+using io::split;
 
 int index_of(const std::vector<std::string>& v, const std::string& x, const std::string& what) {
   for (size_t i = 0; i < v.size(); ++i)
@@ -39,13 +39,6 @@ size_t flat_index(const std::vector<int>& idx, const io::h5::Dims& dims) {
   return f;
 }
 
-std::vector<double> weights_row(const io::h5::File& f, const std::string& dataset, int row) {
-  io::h5::Dims d;
-  const std::vector<double> w = f.read<double>(dataset, &d);
-  check_range("--replicate", row, static_cast<int>(d[0]));
-  return std::vector<double>(w.begin() + row * d[1], w.begin() + (row + 1) * d[1]);
-}
-
 }  // namespace
 
 int export_scene(const ExportArgs& a) {
@@ -56,7 +49,12 @@ int export_scene(const ExportArgs& a) {
                        a.run << " is not a divcoll run file");
   const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
   std::vector<collective::Agent> agents;
-  for (const auto& x : mpi::read_final_population(f)) agents.push_back(x.agent);
+  for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
+  // pairs and chains need the anchors the connectors stage stored (the ones every stage used)
+  auto with_anchors = [&] {
+    DIVCOLL_THROW_UNLESS(f.has("connectors/anchors"), a.run << " has no connectors/anchors: run the connectors stage first");
+    io::read_anchors(f, "connectors/anchors", agents);
+  };
   const int pop = static_cast<int>(agents.size());
 
   sim::Scene s;
@@ -82,9 +80,9 @@ int export_scene(const ExportArgs& a) {
       const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
       const auto up = collective::deploy_uniform_pairs(cfg)[a.pair];
       const int p = diverse ? dp[2 * a.pair] : up.first, q = diverse ? dp[2 * a.pair + 1] : up.second;
-      for (int i : {p, q}) agents[i].anchors = collective::compute_anchors(agents[i]);
-      const double k = kind.rfind("weak", 0) == 0 ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness;
-      s = collective::pair_scene(agents[p], agents[q], weights_row(f, "connectors/" + kind + "/params", a.replicate), k,
+      with_anchors();
+      const double k = io::stiffness(cfg, kind);
+      s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,
                                  a.env);
       idx = {e, t, a.replicate, a.pair};
       what = a.type + " replicate " + std::to_string(a.replicate) + ", pair " + std::to_string(a.pair) + " (agents " +
@@ -98,9 +96,9 @@ int export_scene(const ExportArgs& a) {
     check_range("--pair", a.pair, cfg.deploy.pairs);
     const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
     const int p = dp[2 * a.pair], q = dp[2 * a.pair + 1];
-    for (int i : {p, q}) agents[i].anchors = collective::compute_anchors(agents[i]);
-    s = collective::pair_scene(agents[p], agents[q], weights_row(f, "specialists/" + a.env + "/params", a.replicate),
-                               cfg.connectors.weak_stiffness, a.env);
+    with_anchors();
+    s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "specialists/" + a.env, a.replicate),
+                               io::stiffness(cfg, "weak_diverse"), a.env);
     idx = {e, a.replicate, a.pair};
     steps = cfg.deploy.episode_steps;
     stage = "specialists";
@@ -124,13 +122,11 @@ int export_scene(const ExportArgs& a) {
       const size_t row = static_cast<size_t>(a.replicate) * cfg.scaling.draws + a.draw;
       members.assign(all.begin() + row * a.size, all.begin() + (row + 1) * a.size);
     }
+    with_anchors();
     std::vector<const collective::Agent*> ptr;
-    for (int32_t m : members) {
-      agents[m].anchors = collective::compute_anchors(agents[m]);
-      ptr.push_back(&agents[m]);
-    }
-    s = collective::chain_scene(ptr, weights_row(f, v ? "connectors/weak_diverse/params" : "connectors/weak_uniform/params", a.replicate),
-                                cfg.connectors.weak_stiffness, a.env);
+    for (int32_t m : members) ptr.push_back(&agents[m]);
+    s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
+                                io::stiffness(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);
     idx = {e, si, v, a.replicate, a.draw};
     steps = cfg.scaling.episode_steps;
     stage = "scaling";

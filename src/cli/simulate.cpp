@@ -11,10 +11,11 @@
 #include "io/config.hpp"
 #include "io/environments.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
+#include "io/run_read.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "morph/body.hpp"
-#include "mpi/protocol.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll::cli {
@@ -67,20 +68,13 @@ int simulate(const SimulateArgs& a) {
   return r.status == sim::Status::ok ? 0 : 3;
 }
 
-namespace {
-double stiffness_of(const std::string& kind) {
-  if (kind == "weak") return collective::kWeakConnector;
-  if (kind == "strong") return collective::kStrongConnector;
-  throw InputError(msg() << "--connector must be weak or strong (got '" << kind << "')");
-}
-}  // namespace
-
 int scene(const SceneArgs& a) {
   check_output_path(a.out, a.force);
   io::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const double k = stiffness_of(a.connector);
+  const double k = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config),
+                                         a.connector);
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
@@ -118,8 +112,8 @@ int median_pair(const std::string& run, int* n_ok, double* median_bl) {
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("deploy/collectives/travel_bl") && f.group("deploy").read_string("status") == "complete",
                        run << " has no complete deploy stage (the demo needs trained agents and connectors)");
-  const auto envs = mpi::split(f.group("deploy").read_string("environments"));
-  const auto types = mpi::split(f.group("deploy").read_string("types"));
+  const auto envs = io::split(f.group("deploy").read_string("environments"));
+  const auto types = io::split(f.group("deploy").read_string("types"));
   int e = -1, t = -1;
   for (size_t i = 0; i < envs.size(); ++i)
     if (envs[i] == "flat") e = static_cast<int>(i);
@@ -165,8 +159,8 @@ int demo(const DemoArgs& a) {
       DIVCOLL_THROW_UNLESS(rc == 0, "divcoll export failed for " << env);
       const io::h5::File f = io::h5::File::open(a.run);
       const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
-      const auto envs = mpi::split(f.group("deploy").read_string("environments"));
-      const auto types = mpi::split(f.group("deploy").read_string("types"));
+      const auto envs = io::split(f.group("deploy").read_string("environments"));
+      const auto types = io::split(f.group("deploy").read_string("types"));
       const int e = static_cast<int>(std::find(envs.begin(), envs.end(), env) - envs.begin());
       const int t = static_cast<int>(std::find(types.begin(), types.end(), "weak_diverse@diverse") - types.begin());
       DIVCOLL_THROW_UNLESS(e < static_cast<int>(envs.size()), a.run << " has no deployment in " << env);
@@ -204,7 +198,7 @@ int demo(const DemoArgs& a) {
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, collective::kWeakConnector, env);
+      const sim::Scene s = collective::pair_scene(P, A, conn, io::strength_stiffness(io::default_config(), "weak"), env);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
       sim::RunOptions opt;

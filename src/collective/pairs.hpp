@@ -1,5 +1,5 @@
 // pairs for connector training and deployment (SPEC §6.4, §7.2): which pairs, one pair's episode with
-// the gradient of its travel w.r.t. the connector weights, and the connector optimizer
+// the gradient of its travel w.r.t. the connector weights (the optimizer: evo/optim.hpp)
 #pragma once
 
 #include <string>
@@ -11,14 +11,6 @@
 #include "sim/engine.hpp"
 
 namespace divcoll::collective {
-
-// the connector kinds of SPEC §6.4, in their fixed order
-inline const std::vector<std::string>& connector_kinds() {
-  static const std::vector<std::string> k = {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"};
-  return k;
-}
-bool kind_is_weak(const std::string& kind);
-bool kind_is_diverse(const std::string& kind);
 
 // (posterior, anterior) agent indices: agent i with its clone for i < n
 std::vector<std::pair<int, int>> uniform_pairs(int n);
@@ -52,15 +44,5 @@ PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& en
 // the same with every option of the run (e.g. record); `full` (if given) receives the whole result
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
                       sim::RunResult* full, double feature_offset = 0);
-
-// Adam on a flat parameter vector with global-norm gradient clipping (SPEC §6.4)
-struct Adam {
-  std::vector<double> m, v;  // moments, same size as the parameters
-  // one step of descent on `loss_grad` (the gradient of the loss), t = 1, 2, ... the step number
-  void step(std::vector<double>& params, std::vector<double> loss_grad, double lr, double clip_norm, int t);
-};
-
-// the normalized alternative: θ ← θ − lr·g/‖g‖
-void normalized_step(std::vector<double>& params, const std::vector<double>& loss_grad, double lr);
 
 }  // namespace divcoll::collective

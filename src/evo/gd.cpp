@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/check.hpp"
+#include "evo/optim.hpp"
 
 namespace divcoll::evo {
 
@@ -111,7 +112,7 @@ double norm(const std::vector<double>& v) {
 TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim) {
   TrainResult out;
   const size_t P = a.params.size();
-  std::vector<double> m(P, 0.0), v(P, 0.0);  // Adam moments
+  Adam adam;  // ascent on travel: descent on −travel
   collective::Agent best = a;
   double best_travel = -std::numeric_limits<double>::infinity();
   sim::Status last_status = sim::Status::ok;
@@ -126,13 +127,9 @@ TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulat
     // weights: a normalized ascent step, or Adam
     const double gn = norm(e.g_params);
     if (opt.rule == GdRule::adam) {
-      const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
-      const double c1 = 1 - std::pow(b1, epoch + 1), c2 = 1 - std::pow(b2, epoch + 1);
-      for (size_t q = 0; q < P; ++q) {
-        m[q] = b1 * m[q] + (1 - b1) * e.g_params[q];
-        v[q] = b2 * v[q] + (1 - b2) * e.g_params[q] * e.g_params[q];
-        a.params[q] += opt.adam_lr * (m[q] / c1) / (std::sqrt(v[q] / c2) + eps);
-      }
+      std::vector<double> loss_grad(P);
+      for (size_t q = 0; q < P; ++q) loss_grad[q] = -e.g_params[q];
+      adam.step(a.params, std::move(loss_grad), opt.adam_lr, std::numeric_limits<double>::infinity(), epoch + 1);
     } else if (gn > 0) {
       for (size_t q = 0; q < P; ++q) a.params[q] += opt.step * e.g_params[q] / gn;
     }

@@ -16,6 +16,7 @@
 
 #include "common/check.hpp"
 #include "io/environments.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::io {
 namespace {
@@ -83,9 +84,13 @@ std::string string_list(const std::vector<std::string>& v) {
   return out + "]";
 }
 
-const std::vector<std::string> kStages = {"agents",  "connectors", "deploy",  "specialists",
-                                          "scaling", "graded",     "analysis"};
-const std::vector<std::string> kKinds = {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"};
+// the stage and connector-kind names come from their tables (io/pipeline.hpp)
+const std::vector<std::string> kStages = [] {
+  std::vector<std::string> v;
+  for (const StageInfo& s : kStageTable) v.emplace_back(s.name);
+  return v;
+}();
+const std::vector<std::string> kKinds = connector_kind_names();
 
 // every key of the run configuration, in file order; defaults are SPEC §4.4, §6.4, §7
 const std::vector<Key>& schema() {

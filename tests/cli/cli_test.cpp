@@ -152,6 +152,22 @@ TEST_F(Cli, SceneCommandWritesAChainThatSimulates) {
   EXPECT_NE(r.out.find("status ok"), std::string::npos) << r.out;
 }
 
+// the connector stiffness of `divcoll scene` is the config's (io/pipeline.hpp), the paper's without --config
+TEST_F(Cli, SceneTakesTheConnectorStiffnessFromTheConfig) {
+  { std::ofstream(path("k.toml")) << "[connectors]\nweak_stiffness = 1234.0\nstrong_stiffness = 45678.0\n"; }
+  const std::vector<std::pair<std::string, double>> cases = {
+      {"", 5000.0}, {" --config " + path("k.toml"), 1234.0}, {" --config " + path("k.toml") + " --connector strong", 45678.0}};
+  for (const auto& [extra, k] : cases) {
+    const Exec w = run("scene --kind pair --force --out " + path("p.h5") + extra);
+    ASSERT_EQ(w.code, 0) << w.out;
+    const sim::Scene s = io::read_scene(path("p.h5"));
+    ASSERT_EQ(s.n_connectors(), 1);
+    for (int sp : s.connector_spring_index) EXPECT_EQ(s.stiffness[sp], k) << extra;
+  }
+  const Exec bad = run("scene --kind pair --out " + path("q.h5") + " --config " + path("nope.toml"));
+  EXPECT_NE(bad.code, 0);
+}
+
 }  // namespace
 }  // namespace divcoll
 

@@ -1,5 +1,5 @@
 // pairs for connector training (SPEC §6.4): the gradient of the full training loss (−mean travel of a
-// batch of pairs) against central finite differences, the optimizers' steps, the pair lists, chains
+// batch of pairs) against central finite differences, the pair lists, chains (the optimizers: tests/evo/optim_test.cpp)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -90,25 +90,6 @@ TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithIts
   EXPECT_EQ(seen.size(), 6u) << "all 6 ordered pairs of 3 agents appear in 400 draws";
   Rng again = make_rng(1, 2, 3);
   EXPECT_EQ(collective::random_pairs(again, 3, 400), d) << "the same stream gives the same pairs";
-}
-
-TEST(Optimizers, AdamFirstStepIsLrTimesSignAndClipScalesTheGradient) {
-  collective::Adam adam;
-  std::vector<double> p = {1.0, 2.0, 3.0};
-  adam.step(p, {0.5, -2.0, 0.0}, 0.01, 1e6, 1);
-  EXPECT_NEAR(p[0], 1.0 - 0.01, 1e-9);
-  EXPECT_NEAR(p[1], 2.0 + 0.01, 1e-9);
-  EXPECT_DOUBLE_EQ(p[2], 3.0);
-  // clipping: the first moment holds the clipped gradient
-  collective::Adam c;
-  std::vector<double> q = {0.0, 0.0};
-  c.step(q, {3.0, 4.0}, 0.01, 1.0, 1);
-  EXPECT_NEAR(c.m[0], 0.1 * 0.6, 1e-12);
-  EXPECT_NEAR(c.m[1], 0.1 * 0.8, 1e-12);
-  std::vector<double> r = {1.0, 1.0};
-  collective::normalized_step(r, {3.0, 4.0}, 0.5);
-  EXPECT_NEAR(r[0], 1.0 - 0.3, 1e-12);
-  EXPECT_NEAR(r[1], 1.0 - 0.4, 1e-12);
 }
 
 TEST(Chains, TravelInBodyLengthsIsTravelOverTheMeanBodyLength) {

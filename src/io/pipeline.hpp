@@ -1,0 +1,75 @@
+// the pipeline's fixed tables, one home each: its stages in the order they run with the random stream each
+// draws from (SPEC §10: every draw is seeded by (run.seed, stream, item)), and the connector kinds (SPEC §6.2,
+// §6.4) with the config key that gives their stiffness. The config schema takes its allowed names from
+// here, the stages their stream ids, the commands their stiffness.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/check.hpp"
+#include "io/config.hpp"
+
+namespace divcoll::io {
+
+// ---- stages --------------------------------------------------------------------------------------
+struct StageInfo {
+  std::string_view name;
+  uint64_t stream;  // first random stream id; a stage may use ids from here up (see each stage's plan)
+};
+// streams: agents 1000 + generation; connectors 2000 + kind·R + replicate; deploy 3000 (pairs) and 3001
+// (hidden states); specialists 4000 + env·R + replicate; scaling 5000 + size; analysis 6000 + 1..3;
+// graded 1000000 + 100000·population (+ 50000 + replicate for its connectors, + 90000 for its pairs)
+inline constexpr std::array<StageInfo, 7> kStageTable = {{{"agents", 1000},
+                                                     {"connectors", 2000},
+                                                     {"deploy", 3000},
+                                                     {"specialists", 4000},
+                                                     {"scaling", 5000},
+                                                     {"graded", 1000000},
+                                                     {"analysis", 6000}}};
+constexpr uint64_t stage_stream(std::string_view name) {
+  for (const StageInfo& s : kStageTable)
+    if (s.name == name) return s.stream;
+  return 0;  // not reached for a known name (a constant expression with an unknown one fails to compile)
+}
+
+// ---- connector kinds -----------------------------------------------------------------------------
+struct ConnectorKind {
+  std::string_view name;
+  bool weak;     // stiffness connectors.weak_stiffness (else connectors.strong_stiffness)
+  bool diverse;  // trained on random pairs of different agents (else on an agent and its clone)
+};
+inline constexpr std::array<ConnectorKind, 4> kConnectorKinds = {{{"weak_uniform", true, false},
+                                                                 {"weak_diverse", true, true},
+                                                                 {"strong_uniform", false, false},
+                                                                 {"strong_diverse", false, true}}};
+
+inline std::vector<std::string> connector_kind_names() {
+  std::vector<std::string> v;
+  for (const ConnectorKind& k : kConnectorKinds) v.emplace_back(k.name);
+  return v;
+}
+// the kind of that name; InputError naming the known ones otherwise
+inline const ConnectorKind& connector_kind(std::string_view name) {
+  for (const ConnectorKind& k : kConnectorKinds)
+    if (k.name == name) return k;
+  std::string all;
+  for (const ConnectorKind& k : kConnectorKinds) all += (all.empty() ? "" : ", ") + std::string(k.name);
+  throw InputError(msg() << "unknown connector kind '" << name << "' (" << all << ")");
+}
+// the stiffness of a kind, force/u, from the config
+inline double stiffness(const RunConfig& cfg, const ConnectorKind& k) {
+  return k.weak ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness;
+}
+inline double stiffness(const RunConfig& cfg, std::string_view kind) { return stiffness(cfg, connector_kind(kind)); }
+// the stiffness of a strength alone ("weak" or "strong"), as `divcoll scene --connector` names it
+inline double strength_stiffness(const RunConfig& cfg, std::string_view strength) {
+  if (strength == "weak") return cfg.connectors.weak_stiffness;
+  if (strength == "strong") return cfg.connectors.strong_stiffness;
+  throw InputError(msg() << "--connector must be weak or strong (got '" << strength << "')");
+}
+
+}  // namespace divcoll::io

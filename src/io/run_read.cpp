@@ -1,0 +1,127 @@
+#include "io/run_read.hpp"
+
+#include <sstream>
+
+#include "common/check.hpp"
+#include "sim/scene.hpp"
+
+namespace divcoll::io {
+
+using h5::Dims;
+namespace {
+constexpr int M11 = sim::kAgentMasses, S21 = sim::kAgentSprings;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string x; std::getline(ss, x, ',');) out.push_back(x);
+  return out;
+}
+
+std::vector<evo::Individual> read_pool(const h5::Node& file, const std::string& g, std::vector<uint8_t>* survived) {
+  Dims d;
+  const auto id = file.read<int64_t>(g + "/id", &d);
+  const size_t M = d[0];
+  const auto parent = file.read<int64_t>(g + "/parent");
+  const auto cells = file.read<int64_t>(g + "/cells");
+  const auto springs = file.read<int64_t>(g + "/springs");
+  const auto rest_pos = file.read<double>(g + "/rest_pos");
+  const auto si = file.read<int32_t>(g + "/spring_i");
+  const auto sj = file.read<int32_t>(g + "/spring_j");
+  const auto rl = file.read<double>(g + "/rest_length");
+  const auto amp = file.read<double>(g + "/amplitude");
+  Dims pd;
+  const auto params = file.read<double>(g + "/params", &pd);
+  const auto fit = file.read<double>(g + "/fitness");
+  const auto trav = file.read<double>(g + "/travel_u");
+  const auto status = file.read<uint8_t>(g + "/status");
+  const auto desc = file.read<double>(g + "/descriptor");
+  Dims cd;
+  const auto curve = file.read<double>(g + "/curve_u", &cd);
+  if (survived) *survived = file.read<uint8_t>(g + "/survived");
+  std::vector<evo::Individual> out(M);
+  const size_t P = pd[1], C = cd[1];
+  for (size_t i = 0; i < M; ++i) {
+    evo::Individual& x = out[i];
+    x.id = id[i];
+    x.parent = parent[i];
+    x.agent.cells = static_cast<uint32_t>(cells[i]);
+    x.agent.springs = static_cast<uint32_t>(springs[i]);
+    x.agent.rest_pos.assign(rest_pos.begin() + i * 2 * M11, rest_pos.begin() + (i + 1) * 2 * M11);
+    x.agent.spring_i.assign(si.begin() + i * S21, si.begin() + (i + 1) * S21);
+    x.agent.spring_j.assign(sj.begin() + i * S21, sj.begin() + (i + 1) * S21);
+    x.agent.rest_length.assign(rl.begin() + i * S21, rl.begin() + (i + 1) * S21);
+    x.agent.amplitude.assign(amp.begin() + i * S21, amp.begin() + (i + 1) * S21);
+    x.agent.params.assign(params.begin() + i * P, params.begin() + (i + 1) * P);
+    x.train.fitness_bl = fit[i];
+    x.train.travel_u = trav[i];
+    x.train.status = static_cast<sim::Status>(status[i]);
+    x.train.curve_u.assign(curve.begin() + i * C, curve.begin() + (i + 1) * C);
+    for (int q = 0; q < morph::kDescriptorSize; ++q) x.descriptor[q] = desc[i * morph::kDescriptorSize + q];
+  }
+  return out;
+}
+
+std::vector<evo::Individual> read_final_population(const h5::Node& file, const std::string& group) {
+  DIVCOLL_THROW_UNLESS(file.has(group + "/final"),
+                       file.file() << " has no " << group << "/final: its agents stage has not finished");
+  return read_pool(file, group + "/final", nullptr);
+}
+
+std::vector<std::vector<double>> split_weights(const std::vector<double>& flat, size_t rows) {
+  const size_t Pc = static_cast<size_t>(sim::connector_param_count());
+  DIVCOLL_THROW_UNLESS(flat.size() == rows * Pc, "connector weights: " << flat.size() << " values are not " << rows
+                                                                       << " rows of " << Pc);
+  std::vector<std::vector<double>> out;
+  for (size_t r = 0; r < rows; ++r) out.emplace_back(flat.begin() + r * Pc, flat.begin() + (r + 1) * Pc);
+  return out;
+}
+
+std::vector<double> join_weights(const std::vector<std::vector<double>>& rows) {
+  std::vector<double> flat;
+  for (const auto& p : rows) flat.insert(flat.end(), p.begin(), p.end());
+  return flat;
+}
+
+std::vector<std::vector<double>> read_weights(const h5::Node& file, const std::string& group, int replicates) {
+  DIVCOLL_THROW_UNLESS(file.has(group + "/params"),
+                       file.file() << " has no " << group << "/params: run the stage that trains them first");
+  const hsize_t Pc = static_cast<hsize_t>(sim::connector_param_count());
+  return split_weights(file.read<double>(group + "/params", Dims{static_cast<hsize_t>(replicates), Pc}),
+                       static_cast<size_t>(replicates));
+}
+
+std::vector<double> read_weights_row(const h5::Node& file, const std::string& group, int row) {
+  Dims d;
+  const std::vector<double> w = file.read<double>(group + "/params", &d);
+  DIVCOLL_THROW_UNLESS(d.size() == 2 && d[1] == static_cast<hsize_t>(sim::connector_param_count()),
+                       group << "/params has the shape " << h5::dims_string(d) << ", not replicates × "
+                             << sim::connector_param_count());
+  DIVCOLL_THROW_UNLESS(row >= 0 && row < static_cast<int>(d[0]),
+                       "--replicate = " << row << " is out of range [0, " << d[0] - 1 << "]");
+  return split_weights(w, d[0])[row];
+}
+
+std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents) {
+  std::vector<int32_t> an;
+  for (const auto& a : agents) {
+    const auto& x = a.anchors;
+    an.insert(an.end(), {x.back_foot, x.front_foot, x.back_upper, x.front_upper});
+  }
+  return an;
+}
+
+void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents) {
+  const std::vector<int32_t> an = file.read<int32_t>(path, Dims{static_cast<hsize_t>(agents.size()), 4});
+  for (size_t i = 0; i < agents.size(); ++i)
+    agents[i].anchors = {an[4 * i], an[4 * i + 1], an[4 * i + 2], an[4 * i + 3]};
+}
+
+}  // namespace divcoll::io

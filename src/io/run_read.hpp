@@ -1,0 +1,38 @@
+// what the stages and the commands read back from a run file: the populations an agents stage wrote, the
+// trained connector weights (replicates × P_c), the anchors stored with the connectors stage, and the
+// comma-separated name lists of the stage attributes. Rank-local reads; nothing here knows MPI.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "evo/evolution.hpp"
+#include "io/h5.hpp"
+
+namespace divcoll::io {
+
+// names as one comma-separated attribute value, and back
+std::string join(const std::vector<std::string>& v);
+std::vector<std::string> split(const std::string& s);
+
+// every row of a pool group written by the agents stage (gen_NNN or final); `survived` if given gets its
+// survived column
+std::vector<evo::Individual> read_pool(const h5::Node& file, const std::string& g, std::vector<uint8_t>* survived);
+// the final population of a run file's agents stage (`group` = agents or a graded population's agents)
+std::vector<evo::Individual> read_final_population(const h5::Node& file, const std::string& group = "agents");
+
+// the weights layout of trained connectors: one row of P_c = sim::connector_param_count() values per
+// replicate, rows × P_c in the run file (`<group>/params`)
+std::vector<std::vector<double>> split_weights(const std::vector<double>& flat, size_t rows);
+std::vector<double> join_weights(const std::vector<std::vector<double>>& rows);
+std::vector<std::vector<double>> read_weights(const h5::Node& file, const std::string& group, int replicates);
+// one replicate's row of `<group>/params` (any number of rows in the file; `row` checked against it)
+std::vector<double> read_weights_row(const h5::Node& file, const std::string& group, int row);
+
+// the anchors of a population as stored (population × 4: back foot, front foot, back upper, front upper)
+std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents);
+// the stored anchors set on `agents` (which must match the dataset's row count)
+void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents);
+
+}  // namespace divcoll::io
