@@ -10,7 +10,7 @@ BUILD_RUNTIME=(
   build-essential cmake pkg-config git bc
   libopenmpi-dev openmpi-bin
   libhdf5-openmpi-dev hdf5-tools
-  libeigen3-dev libboost-serialization-dev
+  libeigen3-dev libboost-serialization-dev libpagmo-dev
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
   python3-h5py python3-numpy python3-matplotlib python3-scipy python3-xarray

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "common/check.hpp"
+#include "mpi/agree.hpp"
 
 namespace divcoll::mpi {
 namespace fs = std::filesystem;
@@ -16,14 +17,20 @@ std::string checkpoint_path(const std::string& run_path) { return run_path + ".c
 
 namespace {
 
-// copies src to dst through dst.tmp, fsyncs, renames: dst is always either the old or the new copy
-void atomic_copy(const std::string& src, const std::string& dst) {
+// copies src to dst through dst.tmp, fsyncs, reads the copy back, renames: dst is always either the old
+// or the new copy, and the new one replaces the old only once it is complete and every dataset reads back
+// (with its checksum). The rename gives dst a new inode, so a writer that still has the old file open
+// (a rank of a killed job) cannot touch the new one.
+void atomic_copy(const std::string& src, const std::string& dst, bool verify) {
   const std::string tmp = dst + ".tmp";
   try {
     fs::copy_file(src, tmp, fs::copy_options::overwrite_existing);
     const int fd = ::open(tmp.c_str(), O_RDONLY);
     DIVCOLL_THROW_UNLESS(fd >= 0 && ::fsync(fd) == 0, "cannot sync " << tmp);
     ::close(fd);
+    std::string why;
+    DIVCOLL_THROW_UNLESS(!verify || valid_run_file(tmp, &why), "the new copy " << tmp << " does not read back (" << why
+                                                                                << "); the previous one is kept");
     fs::rename(tmp, dst);
   } catch (...) {
     // a half copy only takes the space a full disk lacks; the previous checkpoint stays as it was
@@ -50,7 +57,7 @@ void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) 
   std::string err;
   if (rank == 0) {
     try {
-      atomic_copy(run_path, checkpoint_path(run_path));
+      atomic_copy(run_path, checkpoint_path(run_path), true);
     } catch (const std::exception& e) {
       ok = 0;
       err = e.what();
@@ -72,21 +79,39 @@ bool valid_run_file(const std::string& path, std::string* why) {
       if (why) *why = "not a complete divcoll run file";
       return false;
     }
-    // every dataset must read back
-    int bad = 0;
+    // every dataset must read back (HDF5 checks each one's Fletcher-32 checksum on the way)
+    struct Bad {
+      int count = 0;
+      std::string first, reason;
+    } bad;
     auto visit = [](hid_t obj, const char* name, const H5O_info_t* info, void* data) -> herr_t {
       if (info->type != H5O_TYPE_DATASET) return 0;
+      Bad& b = *static_cast<Bad*>(data);
       io::h5::Handle d(H5Dopen2(obj, name, H5P_DEFAULT), H5Dclose);
-      if (!d.valid()) return ++*static_cast<int*>(data), 0;
-      io::h5::Handle space(H5Dget_space(d.id()), H5Sclose);
-      io::h5::Handle type(H5Dget_type(d.id()), H5Tclose);
-      const size_t n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.id())) * H5Tget_size(type.id());
-      std::string buf(n, '\0');
-      if (n > 0 && H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) ++*static_cast<int*>(data);
+      bool ok = d.valid();
+      if (ok) {
+        io::h5::Handle space(H5Dget_space(d.id()), H5Sclose);
+        io::h5::Handle type(H5Dget_type(d.id()), H5Tclose);
+        const size_t n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.id())) * H5Tget_size(type.id());
+        std::string buf(n, '\0');
+        ok = n == 0 || H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) >= 0;
+      }
+      if (!ok && b.count++ == 0) {
+        b.first = name;
+        auto walk = [](unsigned k, const H5E_error2_t* err, void* out) -> herr_t {
+          if (k == 0 && err && err->desc) *static_cast<std::string*>(out) = err->desc;
+          return 0;
+        };
+        H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, walk, &b.reason);
+      }
+      H5Eclear2(H5E_DEFAULT);
       return 0;
     };
-    if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &bad) < 0 || bad > 0) {
-      if (why) *why = "some of its datasets do not read back";
+    if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &bad) < 0 || bad.count > 0) {
+      if (why)
+        *why = bad.count == 0 ? std::string("its datasets cannot be listed")
+                              : std::to_string(bad.count) + " of its datasets do not read back or fail their checksum (the first: " + bad.first +
+                                    (bad.reason.empty() ? "" : ": " + bad.reason) + ")";
       return false;
     }
     return true;
@@ -99,27 +124,28 @@ bool valid_run_file(const std::string& path, std::string* why) {
 bool prepare_resume(MPI_Comm comm, const std::string& run_path) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  // 0: start from nothing, 1: continue, 2: damaged without checkpoint
-  int decision = 0;
-  std::string why;
-  if (rank == 0) {
+  // rank 0 decides: start from nothing (false), continue (true), or refuse (every rank throws)
+  bool decision = false;
+  agree_rank0(comm, [&] {
+    std::string why;
     const std::string ck = checkpoint_path(run_path);
     const bool have_run = fs::exists(run_path), have_ck = fs::exists(ck);
     if (have_run && valid_run_file(run_path, &why)) {
-      decision = 1;
+      decision = true;
     } else if (have_ck && valid_run_file(ck, nullptr)) {
       if (have_run) std::printf("resume: %s is damaged (%s); restoring the checkpoint %s\n", run_path.c_str(), why.c_str(), ck.c_str());
-      fs::copy_file(ck, run_path, fs::copy_options::overwrite_existing);
-      decision = 1;
+      // a copy under a new inode: the checkpoint itself stays as it is until the next one replaces it
+      atomic_copy(ck, run_path, false);
+      decision = true;
     } else if (have_run) {
-      decision = 2;
+      throw InputError(msg() << run_path << " cannot be resumed: " << why << ", and it has no usable checkpoint"
+                             << (have_ck ? " (" + ck + " does not read back either)" : std::string())
+                             << "; pass --force to start over");
     }
-  }
-  decision = bcast_int(comm, decision);
-  if (decision == 2)
-    throw InputError(msg() << run_path << " cannot be resumed: " << (rank == 0 ? why : std::string("damaged"))
-                           << ", and it has no usable checkpoint; pass --force to start over");
-  return decision == 1;
+  });
+  int d = decision ? 1 : 0;
+  MPI_Bcast(&d, 1, MPI_INT, 0, comm);
+  return d == 1;
 }
 
 void remove_checkpoint(MPI_Comm comm, const std::string& run_path) {

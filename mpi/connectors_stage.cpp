@@ -7,6 +7,7 @@
 #include <limits>
 #include <numeric>
 
+#include "evo/connector_opt.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "morph/body.hpp"
@@ -67,24 +68,67 @@ std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node
   return agents;
 }
 
+SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots) {
+  SlotGroups g;
+  for (const ConnectorSlot& s : slots) {
+    const auto at = std::find(g.groups.begin(), g.groups.end(), s.group);
+    if (at == g.groups.end()) g.groups.push_back(s.group), g.columns.push_back(s.column + 1);
+    else g.columns[at - g.groups.begin()] = std::max(g.columns[at - g.groups.begin()], s.column + 1);
+  }
+  return g;
+}
+
+void write_slot_row(io::h5::File& file, bool master, const SlotGroups& g, const std::vector<ConnectorSlot>& slots,
+                    const std::string& name, int rows, int row, const std::vector<double>& per_slot) {
+  for (size_t gi = 0; gi < g.groups.size(); ++gi) {
+    std::vector<int64_t> which;
+    std::vector<double> u;
+    if (master) {
+      which.push_back(row);
+      u.assign(g.columns[gi], NAN);
+      for (size_t c = 0; c < slots.size(); ++c)
+        if (slots[c].group == g.groups[gi]) u[slots[c].column] = per_slot[c];
+    }
+    file.write_rows<double>(g.groups[gi] + "/" + name, {static_cast<hsize_t>(rows), static_cast<hsize_t>(g.columns[gi])},
+                            which, u);
+  }
+}
+
+void write_trained_params(MPI_Comm comm, io::h5::File& file, const SlotGroups& g,
+                          const std::vector<ConnectorSlot>& slots, std::vector<std::vector<double>>& params) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const int Pc = sim::connector_param_count();
+  for (size_t gi = 0; gi < g.groups.size(); ++gi) {
+    std::vector<int64_t> rows;
+    std::vector<double> w;
+    if (rank == 0)
+      for (size_t c = 0; c < slots.size(); ++c)
+        if (slots[c].group == g.groups[gi]) rows.push_back(slots[c].column), w.insert(w.end(), params[c].begin(), params[c].end());
+    file.write_rows<double>(g.groups[gi] + "/params", {static_cast<hsize_t>(g.columns[gi]), static_cast<hsize_t>(Pc)},
+                            rows, w);
+  }
+  // every rank gets the trained weights
+  for (auto& p : params) {
+    p.resize(Pc);
+    MPI_Bcast(p.data(), Pc, MPI_DOUBLE, 0, comm);
+  }
+}
+
 std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                                                   const std::vector<collective::Agent>& agents,
                                                   const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
                                                   const std::function<void()>& checkpoint) {
+  if (collective::extended(collective::opt_settings(cfg.connectors)))  // issue 9.2's optimisation keys
+    return train_connectors_extended(comm, cfg, file, agents, slots, spec, checkpoint);
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   const auto& C = cfg.connectors;
   const int N = static_cast<int>(slots.size()), B = spec.batch_pairs, I = spec.iterations;
   const int pop = static_cast<int>(agents.size());
   const int Pc = sim::connector_param_count();
-  // the groups of the slots, in first-appearance order, with their column counts
-  std::vector<std::string> groups;
-  std::vector<int> columns;
-  for (const ConnectorSlot& s : slots) {
-    const auto at = std::find(groups.begin(), groups.end(), s.group);
-    if (at == groups.end()) groups.push_back(s.group), columns.push_back(s.column + 1);
-    else columns[at - groups.begin()] = std::max(columns[at - groups.begin()], s.column + 1);
-  }
+  const SlotGroups sgroups = slot_groups(slots);
+  const std::vector<std::string>& groups = sgroups.groups;
   io::h5::Node stage = file.group(spec.state_group);
 
   // state: weights and Adam moments of every slot
@@ -191,22 +235,9 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
       }
     }
     // curves: row `it` of each group's (I × columns) datasets
-    for (size_t gi = 0; gi < groups.size(); ++gi) {
-      std::vector<int64_t> rows;
-      std::vector<double> u(columns[gi], NAN), b(columns[gi], NAN), n(columns[gi], NAN);
-      if (rank == 0) {
-        rows.push_back(it);
-        for (int c = 0; c < N; ++c)
-          if (slots[c].group == groups[gi])
-            u[slots[c].column] = curve_u[c], b[slots[c].column] = curve_bl[c], n[slots[c].column] = nan_pairs[c];
-      } else {
-        u.clear(), b.clear(), n.clear();
-      }
-      const Dims d = {static_cast<hsize_t>(I), static_cast<hsize_t>(columns[gi])};
-      file.write_rows<double>(groups[gi] + "/curve_u", d, rows, u);
-      file.write_rows<double>(groups[gi] + "/curve_bl", d, rows, b);
-      file.write_rows<double>(groups[gi] + "/nan_pairs", d, rows, n);
-    }
+    write_slot_row(file, rank == 0, sgroups, slots, "curve_u", I, it, curve_u);
+    write_slot_row(file, rank == 0, sgroups, slots, "curve_bl", I, it, curve_bl);
+    write_slot_row(file, rank == 0, sgroups, slots, "nan_pairs", I, it, nan_pairs);
     if ((it + 1) % cfg.output.checkpoint_every == 0 || it + 1 == I) {
       write_state();
       stage.write_int("iterations_done", it + 1);
@@ -230,21 +261,7 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
   }
   if (rank == 0 && done >= I) std::printf("%s: all %d iterations were already done\n", spec.label.c_str(), I);
 
-  // the trained weights per group (row = column of the slot)
-  for (size_t gi = 0; gi < groups.size(); ++gi) {
-    std::vector<int64_t> rows;
-    std::vector<double> w;
-    if (rank == 0)
-      for (int c = 0; c < N; ++c)
-        if (slots[c].group == groups[gi]) rows.push_back(slots[c].column), w.insert(w.end(), params[c].begin(), params[c].end());
-    file.write_rows<double>(groups[gi] + "/params", {static_cast<hsize_t>(columns[gi]), static_cast<hsize_t>(Pc)},
-                            rows, w);
-  }
-  // every rank gets the trained weights
-  for (auto& p : params) {
-    p.resize(Pc);
-    MPI_Bcast(p.data(), Pc, MPI_DOUBLE, 0, comm);
-  }
+  write_trained_params(comm, file, sgroups, slots, params);
   return params;
 }
 

@@ -58,6 +58,27 @@ std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunCo
                                                   const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
                                                   const std::function<void()>& checkpoint);
 
+// the slots' groups in first-appearance order, with their column counts
+struct SlotGroups {
+  std::vector<std::string> groups;
+  std::vector<int> columns;
+};
+SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots);
+// row `row` of each group's (rows × columns) dataset <group>/<name> from the master's per-slot values
+void write_slot_row(io::h5::File& file, bool master, const SlotGroups& g, const std::vector<ConnectorSlot>& slots,
+                    const std::string& name, int rows, int row, const std::vector<double>& per_slot);
+// <group>/params (columns × P_c) from the master's weights, then the weights broadcast to every rank
+void write_trained_params(MPI_Comm comm, io::h5::File& file, const SlotGroups& g,
+                          const std::vector<ConnectorSlot>& slots, std::vector<std::vector<double>>& params);
+
+// the same with the optimisation keys of issue 9.2 (mpi/connector_opt_stage.cpp); train_connectors calls it
+// when collective::extended(...) of the config's [connectors] keys
+std::vector<std::vector<double>> train_connectors_extended(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                                                           const std::vector<collective::Agent>& agents,
+                                                           const std::vector<ConnectorSlot>& slots,
+                                                           const TrainSpec& spec,
+                                                           const std::function<void()>& checkpoint);
+
 void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                           const std::function<void()>& checkpoint);
 

@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   s->add_option("--out", sim.out, "trajectory file to write")->required();
   s->add_flag("--grad", sim.grad, "also write the gradient of travel (grad/*)");
   s->add_flag("--force", sim.force, "overwrite an existing output file");
+  s->add_option("--memory-limit-gb", sim.memory_limit_gb,
+                "refuse an episode whose tape and trajectory need more (default: 80% of MemAvailable)")
+      ->check(CLI::Range(0.0, 1e6));
 
   cli::SceneArgs sc;
   auto* c = app.add_subcommand("scene", "write the scene file of an agent, a pair or a chain in an environment");
@@ -116,6 +119,31 @@ int main(int argc, char** argv) {
   g->add_option("--steps", gdc.steps, "steps per episode")->check(CLI::Range(1, 10000000));
   g->add_option("--seed", gdc.seed, "seed");
 
+  cli::GradDiagArgs gdg;
+  auto* gd = app.add_subcommand("grad-diag", "a connector batch objective's BPTT gradient against finite differences");
+  gd->add_option("run", gdg.run, "run file with the agents stage")->required()->check(CLI::ExistingFile);
+  gd->add_option("overrides", gdg.overrides, "section.key=value overrides of the run file's config");
+  gd->add_option("--kind", gdg.kind, "connector kind (stiffness, uniform or diverse batch)");
+  gd->add_option("--pairs", gdg.pairs, "pairs in the batch")->check(CLI::Range(1, 100000));
+  gd->add_option("--horizons", gdg.horizons, "episode lengths, comma-separated");
+  gd->add_option("--scales", gdg.scales, "perturbation sizes relative to |weights|, comma-separated");
+  gd->add_option("--directions", gdg.directions, "random directions besides the gradient")->check(CLI::Range(0, 1000));
+  gd->add_option("--window", gdg.window, "also the truncated-backpropagation gradient with this window")
+      ->check(CLI::Range(0, 10000000));
+  gd->add_option("--train", gdg.train_iterations, "first train this many iterations with the [connectors] keys")
+      ->check(CLI::Range(0, 1000000));
+
+  cli::ConnectorOptArgs cop;
+  auto* co = app.add_subcommand("connector-opt",
+                                "connector training with the [connectors] keys in one process, then flat travel");
+  co->add_option("run", cop.run, "run file with the agents stage")->required()->check(CLI::ExistingFile);
+  co->add_option("overrides", cop.overrides, "section.key=value overrides of the run file's config");
+  co->add_option("--out", cop.out, "prefix of the CSV files PREFIX_curves.csv and PREFIX_summary.csv")->required();
+  co->add_option("--label", cop.label, "label of this run in the CSV files");
+  co->add_option("--eval-pairs", cop.eval_pairs, "pairs per evaluation on flat")->check(CLI::Range(1, 100000));
+  co->add_option("--eval-steps", cop.eval_steps, "evaluation episode lengths, comma-separated");
+  co->add_flag("--force", cop.force, "overwrite existing CSV files");
+
   mpi::RunArgs evo;
   auto* v = app.add_subcommand("evolve", "the agents stage: evolution and gradient descent (MPI)");
   mpi::RunArgs run;
@@ -171,6 +199,8 @@ int main(int argc, char** argv) {
     if (*sch) return cli::schema(schema_check);
     if (*g) return cli::gd_compare(gdc);
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
+    if (*gd) return cli::grad_diag(gdg);
+    if (*co) return cli::connector_opt(cop);
     if (*v) return mpi::run_main(argc, argv, evo);
     if (*r) return mpi::run_main(argc, argv, run);
     if (*bfc) return mpi::bench_farm_main(argc, argv, bf);

@@ -1,26 +1,40 @@
 #include "mpi/run_cmd.hpp"
 
+#include <fcntl.h>
 #include <mpi.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <algorithm>
 #include <set>
 
+#include "collective/builders.hpp"
+#include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/memory.hpp"
+#include "common/rng.hpp"
+#include "morph/body.hpp"
 #include "common/version.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/file_lock.hpp"
+#include "io/pipeline.hpp"
 #include "mpi/agents_stage.hpp"
+#include "mpi/agree.hpp"
 #include "mpi/analysis_stage.hpp"
 #include "mpi/checkpoint.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
 #include "mpi/later_stages.hpp"
 #include "mpi/scheduler.hpp"
+#include "mpi/stop.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -98,6 +112,141 @@ void derive_run_file(const std::string& base, const std::string& path, const std
   fs::rename(tmp, path);
 }
 
+// what each stage reads from earlier stages (besides its own group)
+const std::vector<std::pair<std::string, std::vector<std::string>>>& stage_inputs() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> t = {
+      {"agents", {}},
+      {"connectors", {"agents"}},
+      {"deploy", {"agents", "connectors"}},
+      {"specialists", {"agents"}},
+      {"scaling", {"agents", "connectors"}},
+      {"graded", {"agents"}},
+      {"analysis", {"agents", "connectors", "deploy"}}};
+  return t;
+}
+
+bool complete_in(const io::h5::File& f, const std::string& stage) {
+  return f.has(stage) && f.group(stage).has_attribute("status") && f.group(stage).read_string("status") == "complete";
+}
+
+// rank 0: refuses a stage that would run without its inputs. `existing`: the run file being continued
+// ("" for a new one); with --from, the base's stages before --from count as present.
+void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std::string& existing) {
+  std::set<std::string> present;
+  auto note_complete = [&](const std::string& file, const std::string& before) {
+    io::h5::File f = io::h5::File::open(file);
+    for (const std::string& s : io::stage_names()) {
+      if (s == before) break;
+      if (complete_in(f, s)) present.insert(s);
+    }
+  };
+  if (!existing.empty()) note_complete(existing, "");
+  if (!args.from.empty()) note_complete(args.base, args.from);
+  // stored values that the stages to run read, where no NaN or Inf may be (a finished stage's weights
+  // and bodies; a running stage's checkpointed optimizer state)
+  const std::string source = !existing.empty() ? existing : args.base;
+  if (!source.empty()) {
+    io::h5::File f = io::h5::File::open(source);
+    std::vector<std::string> finite;
+    if (present.count("agents"))
+      for (const char* d : {"params", "rest_pos", "rest_length", "amplitude"}) finite.push_back(std::string("agents/final/") + d);
+    if (present.count("connectors"))
+      for (const std::string& kind : cfg.connectors.kinds) finite.push_back("connectors/" + kind + "/params");
+    if (!existing.empty() && io::stage_enabled(cfg, "connectors") && !present.count("connectors"))
+      for (const char* d : {"params", "adam_m", "adam_v"}) finite.push_back(std::string("connectors/state/") + d);
+    for (const std::string& d : finite) {
+      if (!f.has(d)) continue;
+      const std::vector<double> v = f.read<double>(d);
+      size_t bad = 0, first = 0;
+      for (size_t i = v.size(); i-- > 0;)
+        if (!std::isfinite(v[i])) ++bad, first = i;
+      if (bad > 0)
+        throw InputError(msg() << source << ": " << d << " holds " << bad << " non-finite value(s) (the first at flat index "
+                               << first << ") where none may be; the stored stage is damaged: rerun it into a new "
+                               << "file (--from, or a new run) instead of continuing this one");
+    }
+  }
+  const std::string where = !existing.empty() ? existing : !args.from.empty() ? args.base : std::string();
+  for (const auto& [stage, needs] : stage_inputs()) {
+    const bool runs = args.agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);
+    if (!runs || present.count(stage)) continue;
+    for (const std::string& need : needs) {
+      if (present.count(need) || (!args.agents_only && io::stage_enabled(cfg, need))) continue;
+      throw InputError(msg() << "stage " << stage << " reads the results of stage " << need << ", but " << need
+                             << " is neither in run.stages nor complete in "
+                             << (where.empty() ? "a new run file" : where)
+                             << ": add it to run.stages, or continue a run file that has it (--resume, or --from "
+                             << stage << " --base OLD.h5)");
+    }
+  }
+}
+
+// the tape of the longest episode with gradients of the stages that run: every rank's simulator holds
+// one, so the ranks on a node share run.memory_limit_gb (default 80% of rank 0's MemAvailable)
+void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  int per_node = 1;
+  MPI_Comm_size(node, &per_node);
+  MPI_Comm_free(&node);
+  agree_rank0(comm, [&] {
+    Rng rng = make_rng(cfg.run.seed, 0, 0);
+    collective::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
+    sim::RunOptions opt;
+    opt.grad = true;
+    uint64_t need = 0;
+    std::string what;
+    auto consider = [&](const sim::Scene& s, int steps, const std::string& key) {
+      opt.steps = steps;
+      const uint64_t n = episode_bytes(s, opt);
+      if (n > need) need = n, what = key + " = " + std::to_string(steps) + ", " + std::to_string(sim::substeps_needed(s)) + " substep(s) per step";
+    };
+    const bool run = !args.agents_only;
+    if (args.agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
+      consider(collective::agent_scene(a, "flat"), cfg.agents.episode_steps, "agents.episode_steps");
+    if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
+      a.anchors = collective::compute_anchors(a);
+      b.anchors = collective::compute_anchors(b);
+      const std::vector<double> w = morph::init_connector_params(rng);
+      double k = cfg.connectors.weak_stiffness;
+      for (const std::string& kind : cfg.connectors.kinds)
+        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
+      std::vector<std::string> envs = {"flat"};
+      if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
+      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, k, env), cfg.connectors.episode_steps, "connectors.episode_steps");
+    }
+    const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
+    if (need > limit)
+      throw InputError(msg() << "each rank's episodes with gradients need about " << gb_text(need) << " of memory ("
+                             << what << "), more than its share of the limit: " << gb_text(limit) << " = "
+                             << (cfg.run.memory_limit_gb > 0 ? "run.memory_limit_gb" : "80% of MemAvailable")
+                             << " / " << per_node << " rank(s) on this node. Shorten the episodes, run fewer ranks "
+                             << "per node, or raise run.memory_limit_gb");
+  });
+}
+
+// refuses outputs that are not (or would not be) regular files, and an output that is one of the inputs
+void check_run_output(const std::string& path, const RunArgs& args) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::exists(st)) {
+    DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the run file's path");
+    DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
+                                                            "pipe or socket); divcoll never writes over one, even with --force");
+    DIVCOLL_THROW_UNLESS(!fs::equivalent(path, args.config, ec), "--out " << path << " is the config file");
+    if (args.resume || args.force) {
+      const int fd = ::open(path.c_str(), O_RDWR);
+      if (fd < 0) {
+        const int err = errno;
+        throw InputError(msg() << path << ": cannot open it for writing: " << std::strerror(err)
+                               << (err == EPERM ? " (is it immutable? see lsattr)" : ""));
+      }
+      ::close(fd);
+    }
+  }
+}
+
 }  // namespace
 
 int run_main(int argc, char** argv, const RunArgs& args) {
@@ -111,62 +260,62 @@ int run_session(const RunArgs& args) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   namespace fs = std::filesystem;
 
-  // everything that can be refused is refused here, identically on every rank, before any work
+  // everything that can be refused is refused here, identically on every rank, before any work: each
+  // check's verdict is agreed by all ranks (mpi/agree.hpp), so a refusal on one rank is every rank's
   io::RunConfig cfg;
   std::string path;
   bool existing = false;
+  io::WriterLock lock;
   try {
-    cfg = io::load_config(args.config, args.overrides);
-    path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
-    DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
-    DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
-    DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
-                         "--from starts a new run file; to continue one that was interrupted, use --resume alone");
-    if (!args.from.empty()) {
-      DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
-                           "--from writes a new run file: give an --out other than --base " << args.base);
-      std::string why;
-      DIVCOLL_THROW_UNLESS(valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
-      io::h5::File f = io::h5::File::open(args.base);
-      const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
-      const std::string diff = incompatible_keys(before, cfg, args.from);
-      if (!diff.empty())
-        throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
-                               << ", so their keys must be the same:" << diff);
-      for (const std::string& s : sections_before(args.from))
-        if (io::stage_enabled(cfg, s))
-          DIVCOLL_THROW_UNLESS(f.has(s) && f.group(s).has_attribute("status") && f.group(s).read_string("status") == "complete",
-                               "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
-    }
-    if (fs::exists(path) && !args.resume && !args.force)
-      throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
+    agree_all(MPI_COMM_WORLD, [&] {
+      cfg = io::load_config(args.config, args.overrides);
+      path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
+      DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
+      DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
+      DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
+                           "--from starts a new run file; to continue one that was interrupted, use --resume alone");
+      check_run_output(path, args);
+      if (!args.from.empty()) {
+        DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
+                             "--from writes a new run file: give an --out other than --base " << args.base);
+        std::string why;
+        DIVCOLL_THROW_UNLESS(valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
+        io::h5::File f = io::h5::File::open(args.base);
+        const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
+        const std::string diff = incompatible_keys(before, cfg, args.from);
+        if (!diff.empty())
+          throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
+                                 << ", so their keys must be the same:" << diff);
+        for (const std::string& s : sections_before(args.from))
+          if (io::stage_enabled(cfg, s))
+            DIVCOLL_THROW_UNLESS(f.has(s) && f.group(s).has_attribute("status") && f.group(s).read_string("status") == "complete",
+                                 "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
+      }
+      if (fs::exists(path) && !args.resume && !args.force)
+        throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
+    });
     const fs::path parent = fs::absolute(path).parent_path();
-    std::error_code mkdir_error;  // a failure is reported below, on every rank alike
-    if (rank == 0) fs::create_directories(parent, mkdir_error);
-    MPI_Barrier(MPI_COMM_WORLD);
-    DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
-    DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+    agree_rank0(MPI_COMM_WORLD, [&] {
+      std::error_code mkdir_error;
+      fs::create_directories(parent, mkdir_error);
+    });
+    agree_all(MPI_COMM_WORLD, [&] {
+      DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
+      DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+    });
+    // one writer per run file: taken before anything is written (the lock also covers the checkpoint)
+    std::string note;
+    agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
+    agree_all(MPI_COMM_WORLD, [&] {
+      if (rank != 0) lock = io::WriterLock::join(path, rank);
+    });
+    if (rank == 0 && !note.empty()) std::printf("divcoll: %s\n", note.c_str());
     // a run resumes only with the config it started with (checked read-only, before anything is opened
     // for writing; rank 0 reads, every rank gets the verdict)
     existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
-    if (!args.from.empty()) {
-      // a copy of the base's earlier stages is made now and continued like a resumed run
-      int ok = 1;
-      std::string err;
-      if (rank == 0) try {
-          derive_run_file(args.base, path, args.from, io::to_toml(cfg));
-        } catch (const std::exception& e) {
-          ok = 0;
-          err = e.what();
-        }
-      MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-      if (!ok) throw InputError(msg() << "cannot make " << path << " from " << args.base << ": " << err);
-      if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", path.c_str(), args.base.c_str(), args.from.c_str());
-      existing = true;
-    }
-    if (existing && args.from.empty()) {
-      std::string diff;
-      if (rank == 0) {
+    if (existing) {
+      agree_rank0(MPI_COMM_WORLD, [&] {
+        std::string diff;
         io::h5::File f = io::h5::File::open(path);
         if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
           diff = " (not a divcoll run file)";
@@ -174,18 +323,32 @@ int run_session(const RunArgs& args) {
           const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
           const auto a = io::flat(before), b = io::flat(cfg);
           // keys that choose what runs now or how it reports, not what it computes, may change
-          const std::set<std::string> free = {"run.stages", "run.progress_every_s", "output.dir",
+          const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
                                               "output.checkpoint_every"};
           for (size_t i = 0; i < a.size(); ++i)
             if (a[i].second != b[i].second && !free.count(a[i].first))
               diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
         }
-      }
-      int len = static_cast<int>(diff.size());
-      MPI_Bcast(&len, 1, MPI_INT, 0, MPI_COMM_WORLD);
-      diff.resize(len);
-      MPI_Bcast(diff.data(), len, MPI_CHAR, 0, MPI_COMM_WORLD);
-      if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+        if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+      });
+    }
+    // memory: the tapes of the episodes with gradients, before any is allocated
+    check_memory(MPI_COMM_WORLD, cfg, args);
+    // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
+    agree_rank0(MPI_COMM_WORLD, [&] {
+      check_stage_inputs(cfg, args, existing ? path : std::string());
+    });
+    if (!args.from.empty()) {
+      // a copy of the base's earlier stages is made now and continued like a resumed run
+      agree_rank0(MPI_COMM_WORLD, [&] {
+        try {
+          derive_run_file(args.base, path, args.from, io::to_toml(cfg));
+        } catch (const std::exception& e) {
+          throw InputError(msg() << "cannot make " << path << " from " << args.base << ": " << e.what());
+        }
+      });
+      if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", path.c_str(), args.base.c_str(), args.from.c_str());
+      existing = true;
     }
   } catch (const InputError& e) {
     if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
@@ -223,7 +386,12 @@ int run_session(const RunArgs& args) {
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    auto ckpt = [&] { checkpoint(MPI_COMM_WORLD, file, path); };
+    // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once
+    arm_stop_signals(rank, cfg.run.stop_grace_s);
+    auto ckpt = [&] {
+      checkpoint(MPI_COMM_WORLD, file, path);
+      stop_point(MPI_COMM_WORLD);
+    };
     if (!existing) ckpt();
     file.write_int("ranks", size);
     if (rank == 0)
@@ -240,42 +408,59 @@ int run_session(const RunArgs& args) {
         {"deploy", run_deploy_stage},           {"specialists", run_specialists_stage},
         {"scaling", run_scaling_stage},         {"graded", run_graded_stage},
         {"analysis", run_analysis_stage}};
-    for (const auto& [name, fn] : stages) {
-      if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
-      if (file.has(name) && file.group(name).has_attribute("status") &&
-          file.group(name).read_string("status") == "complete") {
-        if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
-        continue;
+    try {
+      for (const auto& [name, fn] : stages) {
+        if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
+        if (file.has(name) && file.group(name).has_attribute("status") &&
+            file.group(name).read_string("status") == "complete") {
+          if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
+          continue;
+        }
+        const auto t1 = std::chrono::steady_clock::now();
+        const FarmClock before = farm_clock();
+        fn(MPI_COMM_WORLD, cfg, file, ckpt);
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+        // how busy each rank was (seconds computing items), gathered on every rank
+        double busy = farm_clock().compute_s - before.compute_s;
+        std::vector<double> busy_all(size);
+        MPI_Allgather(&busy, 1, MPI_DOUBLE, busy_all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+        std::string busy_text;
+        double busy_sum = 0, busy_max = 0;
+        for (double b : busy_all) {
+          char tmp[32];
+          std::snprintf(tmp, sizeof tmp, "%s%.3f", busy_text.empty() ? "" : ",", b);
+          busy_text += tmp;
+          busy_sum += b, busy_max = std::max(busy_max, b);
+        }
+        io::h5::Node g = file.group(name);
+        g.write_double("wall_s_last_session", wall);
+        g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
+        // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
+        g.write_string("busy_s_per_rank_last_session", busy_text);
+        if (rank == 0 && g.has_attribute("status") && g.read_string("status") == "complete")
+          std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
+                      name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
+                      busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
       }
-      const auto t1 = std::chrono::steady_clock::now();
-      const FarmClock before = farm_clock();
-      fn(MPI_COMM_WORLD, cfg, file, ckpt);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      // how busy each rank was (seconds computing items), gathered on every rank
-      double busy = farm_clock().compute_s - before.compute_s;
-      std::vector<double> busy_all(size);
-      MPI_Allgather(&busy, 1, MPI_DOUBLE, busy_all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
-      std::string busy_text;
-      double busy_sum = 0, busy_max = 0;
-      for (double b : busy_all) {
-        char tmp[32];
-        std::snprintf(tmp, sizeof tmp, "%s%.3f", busy_text.empty() ? "" : ",", b);
-        busy_text += tmp;
-        busy_sum += b, busy_max = std::max(busy_max, b);
-      }
-      io::h5::Node g = file.group(name);
-      g.write_double("wall_s_last_session", wall);
-      g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
-      // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
-      g.write_string("busy_s_per_rank_last_session", busy_text);
-      if (rank == 0 && g.has_attribute("status") && g.read_string("status") == "complete")
-        std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
-                    name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
-                    busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
+    } catch (const StopRequested& stop) {
+      // every rank is here, right after the same checkpoint: the file is closed normally
+      disarm_stop_signals();
+      file.close();
+      MPI_Barrier(MPI_COMM_WORLD);
+      lock.release();
+      if (rank == 0)
+        std::printf("divcoll: stopped by %s right after a checkpoint; %s holds every finished step: continue with "
+                    "--resume (exit %d)\n",
+                    signal_name(stop.signal), path.c_str(), kStoppedExit);
+      std::fflush(stdout);
+      return kStoppedExit;
     }
+    disarm_stop_signals();
     file.write_string("end_time", now_iso());
     file.close();
     remove_checkpoint(MPI_COMM_WORLD, path);
+    MPI_Barrier(MPI_COMM_WORLD);
+    lock.release();
     if (rank == 0) std::printf("done: %s\n", path.c_str());
   } catch (const InputError& e) {
     // a failure after work started may be on one rank only: stop every rank, keep what was written

@@ -3,8 +3,10 @@
 # jobs/run-workstation.sh): load a machine profile, resolve the run's paths, and run
 # `divcoll run CONFIG --out OUT --resume` so that it can be stopped and continued without losing work.
 #
-# Stopping. divcoll has no signal handler: a killed run continues from its last checkpoint (OUT.ckpt, replaced
-# after every output.checkpoint_every generations or iterations) on --resume, bit-identically. So on the
+# Stopping. A killed run continues from its last checkpoint (OUT.ckpt, replaced after every
+# output.checkpoint_every generations or iterations) on --resume, bit-identically. divcoll itself stops right
+# after its next checkpoint on SIGTERM/SIGINT/SIGUSR1 with exit 75 (mpirun forwards only SIGUSR1; on TERM it
+# kills the ranks within a second, which loses at most the work since the last checkpoint). So on the
 # "time is nearly up" signal (SIGUSR1: Slurm's --signal=B:USR1@T, or divcoll_arm_timer under PBS) the run is
 # stopped right after its next checkpoint, or after DIVCOLL_STOP_GRACE_S seconds (default 60) if none comes:
 # at most the work since the last checkpoint is lost, and the time is used up to the checkpoint. Keep the

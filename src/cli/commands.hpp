@@ -7,6 +7,9 @@
 #include <utility>
 #include <vector>
 
+#include "collective/builders.hpp"
+#include "io/config.hpp"
+
 namespace divcoll::cli {
 
 // divcoll simulate --scene S.h5 --steps T --out TRAJ.h5 [--grad] [--force]
@@ -15,6 +18,7 @@ struct SimulateArgs {
   int steps = 1000;
   bool grad = false;
   bool force = false;
+  double memory_limit_gb = 0;  // 0: 80% of MemAvailable
 };
 int simulate(const SimulateArgs& a);
 
@@ -88,6 +92,32 @@ struct GdCompareArgs {
 };
 int gd_compare(const GdCompareArgs& a);
 
+// divcoll grad-diag RUN.h5: the backpropagated gradient of a connector batch objective against finite
+// differences, at several horizons and perturbation scales (src/cli/grad_diag.cpp)
+struct GradDiagArgs {
+  std::string run, kind = "weak_uniform", horizons = "100,250,500,1000", scales = "1e-6,1e-5,1e-4,1e-3,1e-2,1e-1";
+  std::vector<std::string> overrides;  // section.key=value on the run file's config
+  int pairs = 16, directions = 2, window = 0, train_iterations = 0;
+};
+int grad_diag(const GradDiagArgs& a);
+// a run file's config (with overrides) and final agents with their anchors (InputError if it has none)
+struct RunAgents {
+  io::RunConfig cfg;
+  std::vector<collective::Agent> agents;
+};
+RunAgents load_run_agents(const std::string& run, const std::vector<std::string>& overrides);
+
+// divcoll connector-opt RUN.h5 [key=value ...] --out PREFIX: connector training with the [connectors] keys
+// in one process on a run file's agents, then the trained pairs and their agents alone on flat
+struct ConnectorOptArgs {
+  std::string run, out, label = "run";
+  std::vector<std::string> overrides;
+  int eval_pairs = 32;
+  std::string eval_steps = "1000,3000";
+  bool force = false;
+};
+int connector_opt(const ConnectorOptArgs& a);
+
 // divcoll compare A B: 0 if every dataset is bit-identical, 1 if not
 int compare(const std::string& a, const std::string& b);
 // every dataset of a file: path → (dims, raw bytes in the file's own type); attributes are left out
@@ -102,7 +132,8 @@ int schema(const std::string& check);
 // divcoll envs: the built-in environments
 int envs();
 
-// refuses to overwrite an existing file unless forced
-void check_output_path(const std::string& path, bool force);
+// refuses to overwrite an existing file unless forced, and always refuses an output that is a directory,
+// not a regular file (a device node: never replaced, even with --force), or one of `inputs`
+void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs = {});
 
 }  // namespace divcoll::cli

@@ -42,7 +42,7 @@ size_t flat_index(const std::vector<int>& idx, const io::h5::Dims& dims) {
 }  // namespace
 
 int export_scene(const ExportArgs& a) {
-  check_output_path(a.out, a.force);
+  check_output_path(a.out, a.force, {a.run});
   io::h5::quiet_errors();
   const io::h5::File f = io::h5::File::open(a.run);
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",

@@ -8,6 +8,7 @@
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "common/check.hpp"
+#include "io/memory.hpp"
 #include "io/config.hpp"
 #include "io/environments.hpp"
 #include "io/h5.hpp"
@@ -20,9 +21,19 @@
 
 namespace divcoll::cli {
 
-void check_output_path(const std::string& path, bool force) {
+void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs) {
   namespace fs = std::filesystem;
   DIVCOLL_THROW_UNLESS(!path.empty(), "no output path given");
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::exists(st)) {
+    DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the output file's path");
+    DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
+                                                            "pipe or socket); divcoll never writes over one, even with --force");
+    for (const std::string& in : inputs)
+      DIVCOLL_THROW_UNLESS(!fs::equivalent(path, in, ec), "--out " << path << " is the input file " << in
+                                                                    << "; write the output elsewhere");
+  }
   if (fs::exists(path) && !force)
     throw InputError(msg() << path << " exists; pass --force to overwrite it");
   const fs::path parent = fs::absolute(path).parent_path();
@@ -44,21 +55,29 @@ io::Trajectory trajectory_of(const sim::Scene& scene, const sim::RunResult& r, i
 }
 
 int simulate(const SimulateArgs& a) {
-  check_output_path(a.out, a.force);
+  check_output_path(a.out, a.force, {a.scene});
   const sim::Scene scene = io::read_scene(a.scene);
   sim::RunOptions opt;
   opt.steps = a.steps;
   opt.grad = a.grad;
   opt.record = true;
-  const sim::RunResult r = sim::simulate(scene, opt);
+  // the tape (--grad) and the recorded trajectory, known before they are allocated
+  const uint64_t need = episode_bytes(scene, opt), limit = memory_limit_bytes(a.memory_limit_gb);
+  DIVCOLL_THROW_UNLESS(need <= limit, a.scene << " for " << a.steps << " steps" << (a.grad ? " with --grad" : "")
+                                              << " needs about " << gb_text(need) << " of memory ("
+                                              << sim::substeps_needed(scene) << " substep(s) per step), more than the limit of "
+                                              << gb_text(limit)
+                                              << (a.memory_limit_gb > 0 ? " (--memory-limit-gb)" : " (80% of MemAvailable; raise it with --memory-limit-gb)")
+                                              << ": simulate fewer steps");
+  sim::RunResult r = sim::simulate(scene, opt);
 
   io::Trajectory t = trajectory_of(scene, r, a.steps);
   t.has_grad = a.grad;
   if (a.grad) {
-    t.grad_agent_params = r.grad_agent_params;
-    t.grad_connector_params = r.grad_connector_params;
-    t.grad_x0 = r.grad_x0;
-    t.grad_rest_length = r.grad_rest_length;
+    t.grad_agent_params = std::move(r.grad_agent_params);
+    t.grad_connector_params = std::move(r.grad_connector_params);
+    t.grad_x0 = std::move(r.grad_x0);
+    t.grad_rest_length = std::move(r.grad_rest_length);
   }
   io::write_trajectory(a.out, t, a.force);
   std::printf("%s: %d steps (%d substeps each), status %s, travel %.6f u = %.4f BL%s\n", a.out.c_str(), a.steps,

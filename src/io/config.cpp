@@ -101,11 +101,20 @@ const std::vector<Key>& schema() {
         // [run]
         num("run", "seed", T::Int, "1", "[0, inf)", "",
             "run seed: every random draw is seeded by (seed, stage, item)", DIVCOLL_FIELD(run.seed)),
-        text("run", "name", "\"divcoll\"", "run name, used in output file names", DIVCOLL_FIELD(run.name)),
+        text("run", "name", "\"divcoll\"", "run name, used in output file names (a plain file name: no '/', not '..')",
+             DIVCOLL_FIELD(run.name)),
         pick("run", "stages", T::StringList, string_list(kStages), kStages,
              "stages to run; they always run in the order of the default list", DIVCOLL_FIELD(run.stages)),
         num("run", "progress_every_s", T::Double, "10.0", "[0, 86400]", "s",
             "time between progress lines (0 = none)", DIVCOLL_FIELD(run.progress_every_s)),
+        num("run", "stop_grace_s", T::Double, "120.0", "[0, 86400]", "s",
+            "after SIGTERM, SIGINT or SIGUSR1 the run stops right after its next checkpoint (exit 75), or after "
+            "this many seconds without one (exit 128 + signal; the last checkpoint is kept)",
+            DIVCOLL_FIELD(run.stop_grace_s)),
+        num("run", "memory_limit_gb", T::Double, "0.0", "[0, 1e6]", "GB",
+            "memory the simulators' tapes of all ranks on one node may take together; a run whose episodes "
+            "need more is refused before any work (0 = 80% of MemAvailable)",
+            DIVCOLL_FIELD(run.memory_limit_gb)),
         // [agents]
         num("agents", "population", T::Int, "100", "[2, 100000]", "agents", "size of the evolved population",
             DIVCOLL_FIELD(agents.population)),
@@ -166,8 +175,10 @@ const std::vector<Key>& schema() {
         num("connectors", "strong_stiffness", T::Double, "30000.0", "(0, 1e7]", "1/s^2",
             "spring stiffness of strong connectors (per unit mass)",
             DIVCOLL_FIELD(connectors.strong_stiffness)),
-        pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized"},
-             "connector optimizer: adam, or normalized = θ ← θ − lr·g/‖g‖",
+        pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
+             "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
+             "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "
+             "antithetic pairs θ ± es_sigma·ε, centred ranks, Adam on the search gradient (Salimans et al. 2017)",
              DIVCOLL_FIELD(connectors.optimizer)),
         num("connectors", "lr", T::Double, "0.003", "(0, 1]", "", "learning rate (adam) or step (normalized)",
             DIVCOLL_FIELD(connectors.lr)),
@@ -178,6 +189,39 @@ const std::vector<Key>& schema() {
             "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
         pick("connectors", "kinds", T::StringList, string_list(kKinds), kKinds, "connector kinds to train",
              DIVCOLL_FIELD(connectors.kinds)),
+        pick("connectors", "lr_schedule", T::Choice, "\"constant\"", {"constant", "cosine", "exponential"},
+             "learning-rate schedule over the iterations: constant, cosine (half a cosine from lr to "
+             "lr·lr_final) or exponential (geometric from lr to lr·lr_final)",
+             DIVCOLL_FIELD(connectors.lr_schedule)),
+        num("connectors", "lr_final", T::Double, "0.1", "(0, 1]", "",
+            "the rate at the last iteration as a fraction of lr (decaying schedules)",
+            DIVCOLL_FIELD(connectors.lr_final)),
+        num("connectors", "bptt_window", T::Int, "0", "[0, 1e7]", "steps",
+            "truncated backpropagation: the gradient of the per-window displacements, each window's start "
+            "state held fixed (0 = the whole episode)",
+            DIVCOLL_FIELD(connectors.bptt_window)),
+        num("connectors", "grad_samples", T::Int, "1", "[1, 1000]", "",
+            "gradients averaged per step (Gaussian smoothing): 1 = the gradient at the weights; more = at the "
+            "weights ± antithetic N(0, grad_sigma²) perturbations, same batch",
+            DIVCOLL_FIELD(connectors.grad_samples)),
+        num("connectors", "grad_sigma", T::Double, "0.01", "[0, 10]", "",
+            "standard deviation of each weight's perturbation (grad_samples > 1)",
+            DIVCOLL_FIELD(connectors.grad_sigma)),
+        flag("connectors", "keep_best", "false",
+             "return the weights with the best mean travel on a fixed validation batch (scored before every step "
+             "and after the last) instead of the last weights",
+             DIVCOLL_FIELD(connectors.keep_best)),
+        num("connectors", "validation_pairs", T::Int, "32", "[1, 1e6]", "pairs",
+            "pairs of the validation batch (keep_best): uniform kinds the clones of agents batch_pairs, "
+            "batch_pairs+1, ... (mod population: held out when the population exceeds batch_pairs), diverse "
+            "kinds fixed random pairs",
+            DIVCOLL_FIELD(connectors.validation_pairs)),
+        num("connectors", "es_popsize", T::Int, "16", "[5, 10000]", "",
+            "cmaes / es: candidate weight vectors per iteration, each run on the whole batch (es: pairs of them)",
+            DIVCOLL_FIELD(connectors.es_popsize)),
+        num("connectors", "es_sigma", T::Double, "0.02", "(0, 10]", "",
+            "cmaes: initial standard deviation of the search distribution per weight; es: sd of the perturbations",
+            DIVCOLL_FIELD(connectors.es_sigma)),
         // [deploy]
         num("deploy", "episode_steps", T::Int, "3000", "[1, 1e7]", "steps",
             "steps of one deployment episode (agents alone and collectives)",
@@ -784,6 +828,16 @@ RunConfig load_config(const std::string& path, const std::vector<std::string>& o
   DIVCOLL_THROW_UNLESS(in, "cannot read config file " << path);
   std::stringstream ss;
   ss << in.rdbuf();
+  // a file that sets nothing would silently start the paper-scale run (every key at its paper value)
+  bool empty = false;
+  try {
+    empty = toml::parse(ss.str(), path).empty();
+  } catch (const toml::parse_error&) {
+    // parse_config reports it with the line
+  }
+  DIVCOLL_THROW_UNLESS(!empty, path << " sets no key, so every key would take its paper-scale default (hours on "
+                                      "many cores); name a preset instead (configs/tiny.toml, configs/quick.toml, or "
+                                      "configs/paper.toml for the whole paper) or set the keys you mean");
   return parse_config(ss.str(), path, overrides);
 }
 
@@ -794,6 +848,12 @@ RunConfig apply_overrides(const RunConfig& cfg, const std::vector<std::string>& 
 void validate(const RunConfig& cfg) {
   RunConfig c = cfg;
   for (const Key& k : schema()) check_key(k, c);
+  // the run file is <output.dir>/<run.name>.h5: the name must not lead out of output.dir
+  const std::string& name = c.run.name;
+  DIVCOLL_THROW_UNLESS(name.find('/') == std::string::npos && name != "." && name != ".." &&
+                           std::none_of(name.begin(), name.end(), [](char ch) { return static_cast<unsigned char>(ch) < 32; }),
+                       "run.name = " << quoted(name) << " must be a plain file name (no '/', not '.' or '..', no control "
+                                     "characters): the run file is <output.dir>/<run.name>.h5");
   DIVCOLL_THROW_UNLESS(
       listed(c.deploy.environments, "flat"),
       "deploy.environments must list flat, the training environment every experiment compares "

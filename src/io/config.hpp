@@ -22,6 +22,8 @@ struct RunConfig {
     std::vector<std::string>
         stages;                 // stages to run, from agents connectors deploy specialists scaling graded analysis
     double progress_every_s{};  // seconds between progress lines (0 = none)
+    double stop_grace_s{};      // after SIGTERM/SIGINT/SIGUSR1: longest wait for the next checkpoint
+    double memory_limit_gb{};   // per node, for every rank's simulator tape together (0 = 80% of MemAvailable)
     bool operator==(const Run&) const = default;
   };
   struct Agents {
@@ -52,11 +54,20 @@ struct RunConfig {
     int episode_steps{};             // steps of one training rollout
     double weak_stiffness{};         // spring stiffness of weak connectors
     double strong_stiffness{};       // spring stiffness of strong connectors
-    std::string optimizer;           // adam | normalized
+    std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
     double clip_norm{};              // global gradient norm clip
     double init_out_gain{};          // init gain of the connector network's output layer
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
+    std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
+    double lr_final{};               // the rate at the last iteration as a fraction of lr (decaying schedules)
+    int bptt_window{};               // truncated backpropagation window, steps (0 = the whole episode)
+    int grad_samples{};              // gradients averaged per step, at weights perturbed by N(0, grad_sigma²)
+    double grad_sigma{};             // sd of those perturbations
+    bool keep_best{};                // return the weights best on a fixed validation batch
+    int validation_pairs{};          // pairs of that batch
+    int es_popsize{};                // cmaes: candidates per iteration
+    double es_sigma{};               // cmaes: initial sd of the search distribution per weight
     bool operator==(const Connectors&) const = default;
   };
   struct Deploy {

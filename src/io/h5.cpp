@@ -1,6 +1,13 @@
 // the RAII layer over the HDF5 C API: handles, attributes, datasets, and HDF5 failures as InputError.
 #include "io/h5.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <exception>
 #include <filesystem>
 #include <limits>
 
@@ -109,6 +116,33 @@ Handle intermediate_lcpl(const std::string& where) {
   if (!lcpl.valid() || H5Pset_create_intermediate_group(lcpl.id(), 1) < 0)
     fail(where, "cannot make a link creation property list");
   return lcpl;
+}
+
+// a dataset creation property list with HDF5's Fletcher-32 checksum, which HDF5 checks on every read (a
+// damaged byte makes the read fail instead of returning a wrong number). The filter needs chunks: along
+// the first dimension, about 1 MiB each. Scalar and empty datasets stay contiguous (nothing to check).
+Handle checked_dcpl(const Dims& dims, size_t element_bytes, const std::string& where) {
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!dcpl.valid()) fail(where, "cannot make a dataset creation property list");
+  if (dims.empty() || product(dims) == 0) return dcpl;
+  Dims chunk = dims;
+  const hsize_t row_bytes = product(dims) / dims[0] * element_bytes;
+  chunk[0] = std::clamp<hsize_t>((hsize_t{1} << 20) / std::max<hsize_t>(row_bytes, 1), 1, dims[0]);
+  if (H5Pset_chunk(dcpl.id(), static_cast<int>(chunk.size()), chunk.data()) < 0 || H5Pset_fletcher32(dcpl.id()) < 0)
+    fail(where, "cannot set the checksum filter");
+  return dcpl;
+}
+
+// a transfer property list: collective when the file is open with MPI-IO (every rank writes; filtered
+// datasets need it), independent otherwise
+Handle transfer_plist(hid_t file_or_object) {
+  Handle dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
+  hid_t f = H5Iget_file_id(file_or_object);
+  hid_t fapl = H5Fget_access_plist(f);
+  if (H5Pget_driver(fapl) == H5FD_MPIO) H5Pset_dxpl_mpio(dxpl.id(), H5FD_MPIO_COLLECTIVE);
+  H5Pclose(fapl);
+  H5Fclose(f);
+  return dxpl;
 }
 
 }  // namespace
@@ -343,13 +377,14 @@ void Node::write(const std::string& path, const std::vector<T>& data, const Dims
                H5Sclose);
   if (!space.valid()) fail(w, "cannot make a dataspace of dims " + dims_string(dims));
   Handle lcpl = intermediate_lcpl(w);
+  Handle dcpl = checked_dcpl(dims, sizeof(T), w);
   Handle d(
-      H5Dcreate2(id(), path.c_str(), Element<T>::file(), space.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
+      H5Dcreate2(id(), path.c_str(), Element<T>::file(), space.id(), lcpl.id(), dcpl.id(), H5P_DEFAULT),
       H5Dclose);
   if (!d.valid()) fail(w, "cannot create the dataset");
   annotate(d.id(), path, Element<T>::name, dims);
   // an empty selection needs no write (and HDF5 1.10 refuses a null buffer)
-  if (!data.empty() && H5Dwrite(d.id(), Element<T>::mem(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0)
+  if (!data.empty() && H5Dwrite(d.id(), Element<T>::mem(), H5S_ALL, H5S_ALL, transfer_plist(id()).id(), data.data()) < 0)
     fail(w, "cannot write the dataset");
   if (!d.reset()) fail(w, "cannot close the dataset");
 }
@@ -376,7 +411,8 @@ void Node::write_rows(const std::string& path, const Dims& dims, const std::vect
     if (d.valid() && H5Aexists(d.id(), "axes") == 0) annotate(d.id(), path, Element<T>::name, dims);
   } else {
     Handle lcpl = intermediate_lcpl(w);
-    d = Handle(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT),
+    Handle dcpl = checked_dcpl(dims, sizeof(T), w);
+    d = Handle(H5Dcreate2(id(), path.c_str(), Element<T>::file(), fspace.id(), lcpl.id(), dcpl.id(), H5P_DEFAULT),
                H5Dclose);
     if (d.valid()) annotate(d.id(), path, Element<T>::name, dims);
   }
@@ -495,7 +531,9 @@ File File::create(const std::string& path, bool overwrite, hid_t fapl) {
   if (std::filesystem::is_directory(path, ec)) throw InputError(path + " is a directory");
   Handle f(H5Fcreate(path.c_str(), overwrite ? H5F_ACC_TRUNC : H5F_ACC_EXCL, H5P_DEFAULT, fapl), H5Fclose);
   if (!f.valid()) fail(path, "cannot create the HDF5 file");
-  return File(std::move(f), path, "/");
+  File out(std::move(f), path, "/");
+  out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  return out;
 }
 
 File File::open(const std::string& path, bool writable, hid_t fapl) {
@@ -503,6 +541,16 @@ File File::open(const std::string& path, bool writable, hid_t fapl) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + " does not exist");
   if (std::filesystem::is_directory(path, ec)) throw InputError(path + " is a directory, not an HDF5 file");
+  // the system's own reason (permissions, an immutable file, a read-only file system) before HDF5's guess
+  const int fd = ::open(path.c_str(), writable ? O_RDWR : O_RDONLY);
+  if (fd < 0) {
+    const int err = errno;
+    H5Eclear2(H5E_DEFAULT);
+    throw InputError(path + ": cannot open it " + (writable ? "for writing" : "for reading") + ": " +
+                     std::strerror(err) +
+                     (err == EPERM && writable ? " (is it immutable? see lsattr)" : ""));
+  }
+  ::close(fd);
   const htri_t is = H5Fis_hdf5(path.c_str());
   if (is == 0) {
     H5Eclear2(H5E_DEFAULT);
@@ -511,7 +559,18 @@ File File::open(const std::string& path, bool writable, hid_t fapl) {
   if (is < 0) fail(path + " cannot be read as an HDF5 file");
   Handle f(H5Fopen(path.c_str(), writable ? H5F_ACC_RDWR : H5F_ACC_RDONLY, fapl), H5Fclose);
   if (!f.valid()) fail(path + " is not a readable HDF5 file (truncated or damaged?)");
-  return File(std::move(f), path, "/");
+  File out(std::move(f), path, "/");
+  out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  return out;
+}
+
+File::~File() {
+  // (H5Fget_access_plist would duplicate the communicator: collective, so it cannot be asked here)
+  if (std::uncaught_exceptions() > 0 && mpio_ && handle_.valid()) {
+    (void)handle_.release();
+    return;
+  }
+  handle_.reset();
 }
 
 void File::close() {

@@ -3,7 +3,8 @@
 // Handles (hid_t) are closed in destructors and are move-only. HDF5's automatic error printing is
 // turned off; every failure becomes a divcoll::InputError whose message names the file and the object
 // ("runs/a.h5: masses/x0: ..."), with HDF5's own innermost reason appended where it has one.
-// Datasets are contiguous, written in one piece; files are opened for serial access unless the caller
+// Datasets are chunked along their first dimension (about 1 MiB a chunk) with HDF5's Fletcher-32 checksum,
+// which HDF5 checks on every read (scalar and empty ones are contiguous); collective writes under MPI-IO; files are opened for serial access unless the caller
 // passes a file access property list (e.g. an MPI-IO one). A dataset created in a run file gets the
 // attributes of its row of the run-file schema (io/run_file.hpp).
 #pragma once
@@ -42,6 +43,12 @@ class Handle {
   bool valid() const { return id_ >= 0; }
   // closes now; returns false if HDF5 reported a failure
   bool reset();
+  // forgets the identifier without closing it; returns it
+  hid_t release() {
+    const hid_t id = id_;
+    id_ = H5I_INVALID_HID;
+    return id;
+  }
 
  private:
   hid_t id_ = H5I_INVALID_HID;
@@ -124,9 +131,16 @@ class Node {
 
 class File : public Node {
  public:
+  File(File&&) noexcept = default;
+  File& operator=(File&&) noexcept = default;
+  // closes the file, except while an exception unwinds the stack through a file opened with MPI-IO:
+  // closing is collective, and the other ranks are not closing it, so the handle is left to the process's
+  // end (the error path calls MPI_Abort) instead of waiting for ranks that never come
+  ~File();
   // creates a new file; refuses an existing one unless overwrite is set (then it is truncated)
   static File create(const std::string& path, bool overwrite, hid_t fapl = H5P_DEFAULT);
-  // opens an existing HDF5 file; "X does not exist" / "X is not an HDF5 file" otherwise
+  // opens an existing HDF5 file; "X does not exist" / "X is not an HDF5 file" / "cannot open X for
+  // writing: <the system's reason>" otherwise
   static File open(const std::string& path, bool writable = false, hid_t fapl = H5P_DEFAULT);
   // flushes and closes, throwing if HDF5 reports a failure (the destructor closes silently)
   void close();
@@ -135,6 +149,7 @@ class File : public Node {
 
  private:
   using Node::Node;
+  bool mpio_ = false;  // opened or created with an MPI-IO file access property list
 };
 
 }  // namespace divcoll::io::h5

@@ -62,6 +62,7 @@ std::vector<Axis> make_axes() {
        "a connector being trained, in training order: kind-major (specialists: environment-major), then replicate"},
       {"iteration", Labels::none, "", 0, "an optimizer step of connector training (the value is from before it)"},
       {"evaluation", Labels::none, "", 0, "an evaluation of an agent's gradient descent (epochs + 1)"},
+      {"es_candidate", Labels::none, "", 0, "iteration · `connectors.es_popsize` + candidate of the cmaes optimizer"},
       {"sample", Labels::none, "", 0, "a sampled (step, connector spring) of an episode: ⌈`deploy.hidden_subsample` / pairs⌉"},
       {"state", Labels::none, "", 0, "a hidden state in the PaCMAP fit: training states first, then novel; NaN padded to 2 · `analysis.max_states`"},
       {"agent_weight", Labels::none, "", 0, "a weight of the agent's controller (54 → 32 → 32 → 21: 3509, W then b per layer)"},
@@ -73,6 +74,7 @@ std::vector<Axis> make_axes() {
       fixed("xy", "x,y", "a coordinate"),
       fixed("descriptor", "height,width,aspect,compact,cx,cy,sd_y,sym_v,sym_h", "an entry of the behaviour descriptor (SPEC §4.2)"),
       fixed("slot", "posterior,anterior", "an agent's place in a pair"),
+      fixed("best", "score,iteration", "keep-best: the best validation travel (BL) and the iteration whose weights scored it"),
       fixed("anchor", "back_foot,front_foot,back_upper,front_upper", "an anchor mass of an agent (SPEC §6.1)"),
       fixed("role", "worse,better", "the agent of a pair that travelled less / more alone"),
       fixed("estimate", "mean,ci_low,ci_high", "the mean over replicates and its bootstrap 95% CI"),
@@ -93,6 +95,12 @@ std::vector<Entry> base_entries() {
   const auto D = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc,
                     bool graded = false) {
     return Entry{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
+  };
+  // written only with connectors.keep_best / optimizer = cmaes ... (mpi/connector_opt_stage.cpp)
+  const auto O = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc) {
+    Entry e{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", false};
+    e.optional = true;
+    return e;
   };
   const std::string travel_ok = "; NaN unless status is 0";
   const std::string status_doc = "0 ok, 1 nan, 2 unstable";
@@ -138,10 +146,16 @@ std::vector<Entry> base_entries() {
       D("connectors/{kind}/curve_bl", "float64", "iteration,replicate", "BL", "the same in body lengths", true),
       D("connectors/{kind}/nan_pairs", "float64", "iteration,replicate", "count",
         "pairs of the batch whose episode was not ok (left out of the mean)", true),
+      O("connectors/{kind}/val_bl", "float64", "iteration,replicate", "BL",
+        "keep_best: mean validation travel of the weights before each step, then (row I) of the final weights"),
+      O("connectors/{kind}/best_iteration", "float64", "replicate", "index", "keep_best: the row of val_bl whose weights were kept"),
       G("connectors/state", "", "the optimizer at the last checkpoint (resume)", true),
       D("connectors/state/params", "float64", "connector,connector_weight", "1", "weights", true),
       D("connectors/state/adam_m", "float64", "connector,connector_weight", "1", "Adam's first moment", true),
       D("connectors/state/adam_v", "float64", "connector,connector_weight", "1", "Adam's second moment", true),
+      O("connectors/state/best_params", "float64", "connector,connector_weight", "1", "the validation-best weights (optimisation keys)"),
+      O("connectors/state/best", "float64", "connector,best", "1", "keep-best score and iteration (optimisation keys)"),
+      O("connectors/state/es_fitness", "float64", "connector,es_candidate", "u", "cmaes: −batch travel of every candidate so far (replayed on resume)"),
       // deploy (SPEC §7.1–7.2)
       G("deploy", "status,environments,types,envs_done," + kTiming,
         "the deployment: every agent alone and the eight collective types in every environment, no learning"),
@@ -171,10 +185,16 @@ std::vector<Entry> base_entries() {
       D("specialists/{env}/curve_u", "float64", "iteration,replicate", "u", "as connectors/{kind}/curve_u"),
       D("specialists/{env}/curve_bl", "float64", "iteration,replicate", "BL", "as connectors/{kind}/curve_bl"),
       D("specialists/{env}/nan_pairs", "float64", "iteration,replicate", "count", "as connectors/{kind}/nan_pairs"),
+      O("specialists/{env}/val_bl", "float64", "iteration,replicate", "BL",
+        "keep_best: mean validation travel of the weights before each step, then (row I) of the final weights"),
+      O("specialists/{env}/best_iteration", "float64", "replicate", "index", "keep_best: the row of val_bl whose weights were kept"),
       G("specialists/state", "", "the optimizer at the last checkpoint (resume)"),
       D("specialists/state/params", "float64", "connector,connector_weight", "1", "weights"),
       D("specialists/state/adam_m", "float64", "connector,connector_weight", "1", "Adam's first moment"),
       D("specialists/state/adam_v", "float64", "connector,connector_weight", "1", "Adam's second moment"),
+      O("specialists/state/best_params", "float64", "connector,connector_weight", "1", "the validation-best weights (optimisation keys)"),
+      O("specialists/state/best", "float64", "connector,best", "1", "keep-best score and iteration (optimisation keys)"),
+      O("specialists/state/es_fitness", "float64", "connector,es_candidate", "u", "cmaes: −batch travel of every candidate so far (replayed on resume)"),
       D("specialists/travel_bl", "float64", "env,replicate,pair", "BL",
         "each specialist in its environment on deploy's diverse pairs" + travel_ok),
       D("specialists/travel_u", "float64", "env,replicate,pair", "u", "the same in u"),
@@ -502,7 +522,7 @@ std::vector<std::string> check(const h5::File& f, bool every_row) {
   if (H5Ovisit(f.id(), H5_INDEX_NAME, H5_ITER_INC, visit, &v) < 0) v.out.push_back(f.file() + ": cannot visit every object");
   if (every_row)
     for (const Entry& e : entries())
-      if (std::find(v.seen.begin(), v.seen.end(), &e) == v.seen.end())
+      if (!e.optional && std::find(v.seen.begin(), v.seen.end(), &e) == v.seen.end())
         v.out.push_back(e.path + ": a schema row with nothing in the file");
   return v.out;
 }

@@ -284,6 +284,12 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
     ControlBuffers cb{&agent_acts[static_cast<size_t>(t) * m.A * na], &conn_acts[static_cast<size_t>(t) * nc]};
     control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar,
                     opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc, scratch.data());
+    // truncated backpropagation: state t starts a window and ends the previous one, whose seed restarts here
+    if (opt.grad_window > 0 && t > 0 && t % opt.grad_window == 0) {
+      for (int i = 0; i < N; ++i) xbar[2 * i] = 1.0 / N, xbar[2 * i + 1] = 0;
+      std::fill(vbar, vbar + N2, 0.0);
+      std::fill(ob.begin(), ob.begin() + S, 0.0);
+    }
   }
   // x0 is both the initial state and travel's baseline
   res.grad_x0.assign(xbar, xbar + N2);

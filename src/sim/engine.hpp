@@ -34,6 +34,9 @@ const char* status_name(Status s);
 struct RunOptions {
   int steps = 1000;              // control steps T
   bool grad = false;             // reverse-mode gradient of travel (keeps a tape)
+  int grad_window = 0;           // truncated backpropagation: > 0 cuts the adjoint of the state every this many
+                                 // steps (the gradient of travel's per-window displacements, each window's start
+                                 // state held fixed); 0 = the full gradient
   bool agent_param_grad = true;  // with grad: also w.r.t. the agents' controller weights (a third of the
                                  // MLP backward; connector training leaves them frozen and sets false)
   bool record = false;           // keep x, v, touch at every step for output
