@@ -11,6 +11,7 @@
 #include "analysis/dtw.hpp"
 #include "analysis/pacmap.hpp"
 #include "analysis/stats.hpp"
+#include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
@@ -134,7 +135,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   }
   const double stiffness = io::strength_stiffness(cfg, "weak");
   std::vector<std::pair<int, int>> pairs[2];
-  pairs[0] = collective::uniform_pairs(NP);
+  pairs[0] = collective::deploy_uniform_pairs(cfg);
   {
     std::vector<int32_t> dp = file.read<int32_t>("deploy/diverse_pairs", Dims{static_cast<hsize_t>(NP), 2});
     for (int q = 0; q < NP; ++q) pairs[1].emplace_back(dp[2 * q], dp[2 * q + 1]);
@@ -175,6 +176,8 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   const int frames = D.episode_steps / A.dtw_every + 1;
   analysis::DtwOptions dopt;
   dopt.band = static_cast<int>(std::ceil(A.dtw_band * frames));
+  dopt.cost = A.dtw_cost == "squared_sqrt" ? analysis::DtwCost::squared_sqrt : analysis::DtwCost::euclidean;
+  dopt.step = A.dtw_step == "symmetric2" ? analysis::DtwStep::symmetric2 : analysis::DtwStep::symmetric1;
 
   // ---- adversity (§8.1): per environment, agents alone, then the pairs --------------------------------
   const int dtw_done = stage.has_attribute("dtw_envs_done") ? static_cast<int>(stage.read_int("dtw_envs_done")) : 0;
@@ -184,10 +187,11 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   auto alone = [&](const std::string& bytes) {
     const int a = unpack<int32_t>(bytes);
     sim::RunResult full;
-    const collective::PairOutcome o = collective::run_alone(sim, agents[a], env_now, rec, &full);
+    const double offset = collective::alone_feature_offset(cfg, agents[a]);
+    const collective::PairOutcome o = collective::run_alone(sim, agents[a], env_now, rec, &full, offset);
     AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
     if (o.status == sim::Status::ok)
-      d.behaviour = analysis::agent_behaviour(collective::agent_scene(agents[a], env_now), full, 0, A.dtw_every);
+      d.behaviour = analysis::agent_behaviour(collective::agent_scene(agents[a], env_now, {}, offset), full, 0, A.dtw_every);
     return pack(d);
   };
   auto pair = [&](const std::string& bytes) {
@@ -205,7 +209,9 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
         const int m = static_cast<int>(ind.size() / analysis::kBehaviourFeatures);
         const analysis::DtwResult x =
             analysis::dtw(teth.data(), n, ind.data(), m, analysis::kBehaviourFeatures, dopt);
-        d.dtw[slot] = x.distance / x.path_length;
+        d.dtw[slot] = x.distance / (A.dtw_norm == "sum_lengths" ? n + m
+                                     : A.dtw_norm == "max_length" ? std::max(n, m)
+                                                                  : x.path_length);
       }
     return pack(d);
   };
@@ -311,7 +317,10 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
       const std::vector<double> y = analysis::pacmap_fit(X.data(), n, kHidden, po);
       std::vector<uint8_t> label(n, 0);
       std::fill(label.begin() + task.n_train, label.end(), 1);
-      const analysis::Occupancy o = analysis::classify_cells(y, label);
+      std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
+      if (A.cell_scale != 1.0)
+        for (double& c : cells) c *= A.cell_scale;
+      const analysis::Occupancy o = analysis::classify_cells(cells, label);
       d.counts = {o.states_both, o.states_train_only, o.states_novel_only, o.cells_both, o.cells_train_only,
                   o.cells_novel_only};
       d.embedding.assign(y.begin(), y.end());

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
@@ -31,10 +32,11 @@ struct DeployDone {
   EpisodeDone done;
   std::vector<float> hidden;          // K × 32
   std::vector<int32_t> hidden_index;  // K: step · 5 + connector spring
+  double early_bl = 0;                // travel at deploy.early_step, BL (when it is recorded)
 };
 template <class Ar>
 void serialize(Ar& ar, DeployDone& d, unsigned) {
-  ar & d.done & d.hidden & d.hidden_index;
+  ar & d.done & d.hidden & d.hidden_index & d.early_bl;
 }
 
 }  // namespace
@@ -77,7 +79,8 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
                                         : std::min(per_episode, (D.hidden_subsample + NP - 1) / NP);
   Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
   const auto diverse_pairs = collective::random_pairs(prng, pop, NP);
-  const auto uniform_pairs = collective::uniform_pairs(NP);
+  const auto uniform_pairs = collective::deploy_uniform_pairs(cfg);
+  const bool early = D.early_step > 0;  // deploy.early_step: travel at that step too (from the recorded run)
 
   if (!file.has("deploy")) file.create_group("deploy");
   io::h5::Node stage = file.group("deploy");
@@ -102,15 +105,20 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     DeployDone d;
     const bool hidden = e.type >= 0 && std::find(hidden_types.begin(), hidden_types.end(), e.type) != hidden_types.end();
     collective::PairOutcome o;
+    sim::RunOptions opt;
+    opt.steps = D.episode_steps;
+    opt.record = early;
+    sim::RunResult full;
     if (e.type < 0) {
-      o = collective::run_alone(sim, agents[e.a], env_now, D.episode_steps);
+      o = collective::run_alone(sim, agents[e.a], env_now, opt, &full, collective::alone_feature_offset(cfg, agents[e.a]));
+      if (early) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D.early_step) / collective::body_length(agents[e.a]);
     } else {
-      sim::RunOptions opt;
-      opt.steps = D.episode_steps;
       opt.record_hidden = hidden;
-      sim::RunResult full;
       o = collective::run_pair(sim, agents[e.a], agents[e.b], weights[e.type][e.replicate], stiffness[e.type], env_now,
                                opt, &full);
+      if (early)
+        d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D.early_step) /
+                     (0.5 * (collective::body_length(agents[e.a]) + collective::body_length(agents[e.b])));
       if (hidden) {
         // the episode's stream: (seed, deploy + 1, the episode's index in every environment's list)
         const uint64_t item = ((static_cast<uint64_t>(env_index) * T + e.type) * R + e.replicate) * NP + e.pair;
@@ -144,7 +152,7 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     const FarmResult fr = farm(comm, items, compute);
     // row ei of every dataset, written by the master
     std::vector<int64_t> rows;
-    std::vector<double> au, ab, cu, cb;
+    std::vector<double> au, ab, cu, cb, ae, ce;
     std::vector<uint8_t> as, cs;
     std::vector<double> type_mean(T, 0.0);
     std::vector<int> type_ok(T, 0), type_bad(T, 0);
@@ -165,6 +173,7 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
         (alone ? au : cu).push_back(d.travel_u);
         (alone ? ab : cb).push_back(d.travel_bl);
         (alone ? as : cs).push_back(d.status);
+        (alone ? ae : ce).push_back(dd.early_bl);
         if (!alone) {
           const int t = static_cast<int>((q - pop) / (static_cast<size_t>(R) * NP));
           if (d.status == 0 && std::isfinite(d.travel_bl)) type_mean[t] += d.travel_bl, ++type_ok[t];
@@ -179,6 +188,10 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     file.write_rows<double>("deploy/collectives/travel_u", {hE, hT, hR, hN}, rows, cu);
     file.write_rows<double>("deploy/collectives/travel_bl", {hE, hT, hR, hN}, rows, cb);
     file.write_rows<uint8_t>("deploy/collectives/status", {hE, hT, hR, hN}, rows, cs);
+    if (early) {
+      file.write_rows<double>("deploy/agents/travel_bl_early", {hE, hP}, rows, ae);
+      file.write_rows<double>("deploy/collectives/travel_bl_early", {hE, hT, hR, hN}, rows, ce);
+    }
     for (size_t h = 0; h < hidden_types.size(); ++h) {
       const hsize_t hK = static_cast<hsize_t>(K);
       file.write_rows<float>("deploy/hidden/" + types[hidden_types[h]] + "/states", {hE, hR, hN, hK, 32}, rows, hid[h]);

@@ -6,6 +6,7 @@
 // Run file (group /deploy; attributes status, environments, types, envs_done):
 //   diverse_pairs            (pairs × 2)            the fixed list of diverse deployment pairs
 //   agents/travel_bl, travel_u, status              (E × population)
+//   agents/travel_bl_early, collectives/travel_bl_early  the same at deploy.early_step (only when > 0; NaN unless ok)
 //   collectives/travel_bl, travel_u, status         (E × types × replicates × pairs)
 //   hidden/<type>/states     (E × replicates × pairs × K × 32, float32)  connector hidden states (SPEC §8.2)
 //   hidden/<type>/index      (E × replicates × pairs × K)  which: step · 5 + connector spring

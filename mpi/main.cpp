@@ -166,6 +166,7 @@ int main(int argc, char** argv) {
   st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml")->required()->check(CLI::ExistingFile);
   st->add_option("--out", study.out, "study folder (manifest study.toml, <variant>/seed<k>.h5)")->required();
   st->add_flag("--resume", study.resume, "continue a study that was interrupted");
+  st->add_flag("--plan", study.plan, "validate the study file and print its runs (what each computes and reuses); run nothing");
 
   // a mistyped command is named, with the list of commands
   std::string known;

@@ -273,6 +273,20 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
       runs = plan(s);
       status.assign(runs.size(), "planned");
       wall.assign(runs.size(), 0.0);
+      if (args.plan) {
+        if (rank == 0) {
+          std::printf("study %s: %zu variant(s) x %zu seed(s) = %zu runs of %s (valid; nothing run)\n", s.name.c_str(),
+                      s.variants.size(), s.seeds.size(), runs.size(), s.base.c_str());
+          for (size_t i = 0; i < runs.size(); ++i) {
+            std::string st;
+            for (int k : computed(runs[i])) st += (st.empty() ? "" : ",") + io::stage_names()[k];
+            std::printf("  %zu %s: computes %s%s\n", i + 1, runs[i].path.c_str(), st.c_str(),
+                        runs[i].base_run >= 0 ? (", reuses " + runs[runs[i].base_run].path).c_str() : "");
+          }
+        }
+        MPI_Finalize();
+        return 0;
+      }
       const fs::path man = fs::path(dir) / "study.toml";
       if (fs::exists(man)) {
         DIVCOLL_THROW_UNLESS(args.resume, man.string() << " exists: pass --resume to continue the study, or give another --out");

@@ -21,7 +21,7 @@
 // DIR/study.toml is the manifest: the study file's text, and per run its variant, seed, path, the stage it
 // was computed from and the run it reused (empty: computed from scratch), and its status. `--resume`
 // continues a killed study (the study file must be unchanged) and gives the same run files; without it an
-// existing manifest is refused. Every rank runs the same loop (any rank count, like `divcoll run`).
+// existing manifest is refused. `--plan` validates the study file and prints the runs, writing nothing. Every rank runs the same loop (any rank count, like `divcoll run`).
 #pragma once
 
 #include <string>
@@ -32,6 +32,7 @@ struct StudyArgs {
   std::string study;  // study file (TOML)
   std::string out;    // study folder
   bool resume = false;
+  bool plan = false;  // validate and print the runs (what each computes and reuses), run nothing
 };
 
 // initialises MPI, runs the study, finalises; returns the exit code (2 bad input, 1 failure)

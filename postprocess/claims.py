@@ -50,6 +50,7 @@ class Run:
                 self.envs = _s(d.attrs["environments"]).split(",")
                 self.types = _s(d.attrs["types"]).split(",")
                 self.alone, _ = summary.env_means(d["agents/travel_bl"][()], d["agents/status"][()])
+                self.alone = alone_under_protocol(f, self.alone)
                 ct, cs = d["collectives/travel_bl"][()], d["collectives/status"][()]
                 self.coll = {t: summary.env_means(ct[:, i], cs[:, i])[0] for i, t in enumerate(self.types)}
                 self.novel = [i for i, e in enumerate(self.envs) if e != "flat"]
@@ -91,6 +92,23 @@ class Run:
 
     def novel_mean(self, arr):
         return float(np.mean(arr[self.novel]))
+
+
+def alone_under_protocol(f, alone):
+    """agents alone's per-environment means under the stored config's analysis.alone_protocol: same_length (the
+    deployment's travel, as the collectives'), training_length (travel at deploy.early_step), training_rate
+    (deployment travel × connectors.episode_steps / deploy.episode_steps); see `divcoll keys`"""
+    try:
+        cfg = tomllib.loads(_s(f.attrs["config"]))
+    except (KeyError, tomllib.TOMLDecodeError):
+        return alone
+    protocol = cfg.get("analysis", {}).get("alone_protocol", "same_length")
+    if protocol == "training_length":
+        d = f["deploy"]
+        return summary.env_means(d["agents/travel_bl_early"][()], d["agents/status"][()])[0]
+    if protocol == "training_rate":
+        return alone * cfg["connectors"]["episode_steps"] / cfg["deploy"]["episode_steps"]
+    return alone
 
 
 def f3(x):

@@ -337,6 +337,13 @@ def write_page(folder, out):
         lines.append(f"| {v['name']} | {', '.join(f'`{s}`' for s in v['set']) or '—'} | {v.get('doc', '')} | "
                      f"{len(res[v['name']]['seeds'])} ({', '.join(map(str, res[v['name']]['seeds']))}) | "
                      f"{', '.join(reuse) or '—'} |")
+    first = next((r for r in man["run"] if r["status"] == "complete"), None)
+    if first:
+        short = C.short_of(C.config(os.path.join(folder, first["path"])), C.NOVEL)
+        if short:
+            lines += ["", f"A single run of this scale is below the counts claims.py needs to judge one run ({short}); "
+                          "here the evidence is the interval over seeds, and \"held k/n\" counts claims.py's raw test "
+                          "per seed."]
     lines += ["", "## Claims × variants", "",
               "Each cell: the claim's effect (positive = the paper's direction; definitions below), mean over seeds "
               f"with its Student t {LEVEL:.0%} interval over seeds, then how many seeds claims.py's own test held "

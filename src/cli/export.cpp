@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "cli/commands.hpp"
+#include "collective/deploy_variants.hpp"
 #include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/config.hpp"
@@ -67,7 +68,7 @@ int export_scene(const ExportArgs& a) {
     steps = cfg.deploy.episode_steps;
     if (a.what == "alone") {
       check_range("--agent", a.agent, pop);
-      s = collective::agent_scene(agents[a.agent], a.env);
+      s = collective::agent_scene(agents[a.agent], a.env, {}, collective::alone_feature_offset(cfg, agents[a.agent]));
       idx = {e, a.agent};
       what = "agent " + std::to_string(a.agent) + " alone";
     } else {
@@ -77,7 +78,8 @@ int export_scene(const ExportArgs& a) {
       const bool diverse = a.type.substr(a.type.find('@') + 1) == "diverse";
       check_range("--pair", a.pair, cfg.deploy.pairs);
       const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
-      const int p = diverse ? dp[2 * a.pair] : a.pair, q = diverse ? dp[2 * a.pair + 1] : a.pair;
+      const auto up = collective::deploy_uniform_pairs(cfg)[a.pair];
+      const int p = diverse ? dp[2 * a.pair] : up.first, q = diverse ? dp[2 * a.pair + 1] : up.second;
       with_anchors();
       const double k = io::stiffness(cfg, kind);
       s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,

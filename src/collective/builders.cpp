@@ -77,10 +77,10 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
   }
 }
 
-void place_env(sim::Scene& s, const std::string& env) {
+void place_env(sim::Scene& s, const std::string& env, double feature_offset = 0) {
   double mx = s.x0[0];
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx);
+  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset);
 }
 
 }  // namespace
@@ -116,11 +116,11 @@ Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constant
   return a;
 }
 
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c) {
+sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c, double feature_offset) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, a, 0.0);
-  place_env(s, env);
+  place_env(s, env, feature_offset);
   return s;
 }
 

@@ -44,7 +44,8 @@ Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constant
 void update_rest_lengths(Agent& a);
 
 // an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c = {});
+// feature_offset: the environment's features start this much further ahead (deploy.feature_placement)
+sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c = {}, double feature_offset = 0);
 
 // SPEC §6.1: anchors from the agent's own 1000-step run on flat ground
 Anchors compute_anchors(const Agent& a, const sim::Constants& c = {}, int steps = 1000);

@@ -69,8 +69,8 @@ PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& en
 }
 
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
-                      sim::RunResult* full) {
-  const sim::Scene s = agent_scene(a, env);
+                      sim::RunResult* full, double feature_offset) {
+  const sim::Scene s = agent_scene(a, env, {}, feature_offset);
   sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;

@@ -43,6 +43,6 @@ PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agen
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps);
 // the same with every option of the run (e.g. record); `full` (if given) receives the whole result
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
-                      sim::RunResult* full);
+                      sim::RunResult* full, double feature_offset = 0);
 
 }  // namespace divcoll::collective

@@ -235,6 +235,20 @@ const std::vector<Key>& schema() {
         num("deploy", "hidden_subsample", T::Int, "10000", "[0, 1e9]", "states",
             "hidden states kept per environment for the familiarity analysis (0 = all)",
             DIVCOLL_FIELD(deploy.hidden_subsample)),
+        num("deploy", "early_step", T::Int, "0", "[0, 1e7]", "steps",
+            "also record every deployment episode's travel at this step, as deploy/agents/travel_bl_early and "
+            "deploy/collectives/travel_bl_early (NaN unless the episode is ok); 0 = not recorded; 1000 = the "
+            "training episode length", DIVCOLL_FIELD(deploy.early_step)),
+        pick("deploy", "uniform_agents", T::Choice, "\"training\"", {"training", "held_out"},
+             "agents of the uniform deployments: training = agent i with its clone, i < deploy.pairs (the agents "
+             "uniform connectors were trained on when i < connectors.batch_pairs); held_out = agent "
+             "connectors.batch_pairs + i, which no uniform training batch held",
+             DIVCOLL_FIELD(deploy.uniform_agents)),
+        pick("deploy", "feature_placement", T::Choice, "\"front\"", {"front", "pair_mean", "rear"},
+             "terrain features of an agent deployed alone: front = 0.05 u ahead of its front (as for every "
+             "scene); pair_mean = (w + 0.05)/2 further, the mean runway of the two agents of a pair of its clones "
+             "(w its body length); rear = w + 0.05 further, the runway of such a pair's rear agent. Collectives "
+             "always get front", DIVCOLL_FIELD(deploy.feature_placement)),
         // [specialists]
         num("specialists", "replicates", T::Int, "10", "[1, 1000]", "",
             "weak connectors trained per novel environment", DIVCOLL_FIELD(specialists.replicates)),
@@ -265,6 +279,24 @@ const std::vector<Key>& schema() {
         num("analysis", "bootstrap_resamples", T::Int, "1000", "[100, 1e7]", "",
             "resamples of the seeded percentile-bootstrap 95% CIs (SPEC §8.3)",
             DIVCOLL_FIELD(analysis.bootstrap_resamples)),
+        pick("analysis", "alone_protocol", T::Choice, "\"same_length\"",
+             {"same_length", "training_length", "training_rate"},
+             "the agents-alone numbers the claims compare collectives with: same_length = their deployment travel "
+             "over deploy.episode_steps, as the collectives'; training_length = their travel at deploy.early_step "
+             "(the paper's training-length numbers; needs deploy.early_step); training_rate = their deployment "
+             "travel × connectors.episode_steps / deploy.episode_steps", DIVCOLL_FIELD(analysis.alone_protocol)),
+        pick("analysis", "dtw_cost", T::Choice, "\"euclidean\"", {"euclidean", "squared_sqrt"},
+             "DTW local cost and aggregation (ANALYSIS.md §2.2): euclidean = ‖a − b‖ summed along the path; "
+             "squared_sqrt = √ of ‖a − b‖² summed (tslearn)", DIVCOLL_FIELD(analysis.dtw_cost)),
+        pick("analysis", "dtw_step", T::Choice, "\"symmetric1\"", {"symmetric1", "symmetric2"},
+             "DTW step pattern: symmetric1 = every step adds the local cost once; symmetric2 = a diagonal step adds "
+             "it twice (dtw-python's default)", DIVCOLL_FIELD(analysis.dtw_step)),
+        pick("analysis", "dtw_norm", T::Choice, "\"path_length\"", {"path_length", "sum_lengths", "max_length"},
+             "DTW per step (ANALYSIS.md §2.4): the distance over the optimal path's length, over n + m, or over "
+             "max(n, m)", DIVCOLL_FIELD(analysis.dtw_norm)),
+        num("analysis", "cell_scale", T::Double, "1.0", "(0, 1000]", "1/cell",
+            "familiarity cells: PaCMAP coordinates × cell_scale are rounded to integers (1 = the paper's unit "
+            "cells; 2 = cells half as wide, ANALYSIS.md §5)", DIVCOLL_FIELD(analysis.cell_scale)),
         // [output]
         text("output", "dir", "\"runs\"", "directory of run files and checkpoints",
              DIVCOLL_FIELD(output.dir)),
@@ -671,6 +703,20 @@ void check_combinations(const RunConfig& c) {
         c.deploy.pairs <= a.population,
         "deploy.pairs = " << c.deploy.pairs << " is more than agents.population = " << a.population
                           << ": uniform deployment pairs agent i with its clone for i < pairs");
+  }
+  // the study's variant keys (SPEC-free readings of the paper; defaults are the spec's)
+  DIVCOLL_THROW_UNLESS(c.deploy.early_step < c.deploy.episode_steps,
+                       "deploy.early_step = " << c.deploy.early_step << " must be less than deploy.episode_steps = "
+                                              << c.deploy.episode_steps);
+  DIVCOLL_THROW_UNLESS(c.analysis.alone_protocol != "training_length" || c.deploy.early_step > 0,
+                       "analysis.alone_protocol = training_length reads the agents' travel at deploy.early_step, "
+                       "but deploy.early_step = 0 (set it, e.g. to 1000)");
+  if (stage_enabled(c, "deploy") && c.deploy.uniform_agents == "held_out") {
+    DIVCOLL_THROW_UNLESS(c.connectors.batch_pairs + c.deploy.pairs <= a.population,
+                         "deploy.uniform_agents = held_out deploys agents connectors.batch_pairs = "
+                             << c.connectors.batch_pairs << " and up, but connectors.batch_pairs + deploy.pairs = "
+                             << c.connectors.batch_pairs + c.deploy.pairs << " is more than agents.population = "
+                             << a.population);
   }
   // novel environments for the stages that use them
   for (const char* stage : {"specialists", "scaling"}) {

@@ -75,6 +75,9 @@ struct RunConfig {
     int pairs{};                            // pairs per connector replicate
     std::vector<std::string> environments;  // names from configs/environments.toml, flat among them
     int hidden_subsample{};                 // hidden states kept per environment (0 = all)
+    int early_step{};                       // also record travel at this step (0 = no)
+    std::string uniform_agents;             // training | held_out: the agents of uniform deployments
+    std::string feature_placement;          // front | pair_mean | rear: where an agent alone meets features
     bool operator==(const Deploy&) const = default;
   };
   struct Specialists {
@@ -98,6 +101,11 @@ struct RunConfig {
     double dtw_band{};         // Sakoe–Chiba band radius as a fraction of the series length
     int max_states{};          // hidden states per environment in one PaCMAP fit
     int bootstrap_resamples{};  // percentile-bootstrap resamples of the CIs
+    std::string alone_protocol;  // same_length | training_length | training_rate (claims' agents-alone numbers)
+    std::string dtw_cost;        // euclidean | squared_sqrt (ANALYSIS.md §2.2)
+    std::string dtw_step;        // symmetric1 | symmetric2
+    std::string dtw_norm;        // path_length | sum_lengths | max_length (ANALYSIS.md §2.4)
+    double cell_scale{};         // familiarity cells: round(cell_scale · PaCMAP coordinate)
     bool operator==(const Analysis&) const = default;
   };
   struct Output {

@@ -166,6 +166,9 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "deploy.pairs",
                                              "deploy.environments",
                                              "deploy.hidden_subsample",
+                                             "deploy.early_step",
+                                             "deploy.uniform_agents",
+                                             "deploy.feature_placement",
                                              "specialists.replicates",
                                              "specialists.iterations",
                                              "scaling.sizes",
@@ -177,6 +180,11 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "analysis.dtw_band",
                                              "analysis.max_states",
                                              "analysis.bootstrap_resamples",
+                                             "analysis.alone_protocol",
+                                             "analysis.dtw_cost",
+                                             "analysis.dtw_step",
+                                             "analysis.dtw_norm",
+                                             "analysis.cell_scale",
                                              "output.dir",
                                              "output.checkpoint_every"};
   EXPECT_EQ(config_keys(), expected);
@@ -440,4 +448,22 @@ TEST(ConfigStages, EnabledFollowsListAndGradedSwitch) {
 }
 
 }  // namespace
+// the study's variant keys: impossible combinations are refused naming both keys
+TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
+  EXPECT_THAT(refusal("[analysis]\nalone_protocol = \"training_length\"\n"),
+              AllOf(HasSubstr("analysis.alone_protocol = training_length"), HasSubstr("deploy.early_step = 0")));
+  EXPECT_THAT(refusal("[deploy]\nearly_step = 3000\n"),
+              AllOf(HasSubstr("deploy.early_step = 3000"), HasSubstr("deploy.episode_steps = 3000")));
+  EXPECT_THAT(refusal("[deploy]\nuniform_agents = \"held_out\"\n"),
+              AllOf(HasSubstr("connectors.batch_pairs + deploy.pairs = 200"), HasSubstr("agents.population = 100")));
+  EXPECT_THAT(refusal("[deploy]\nfeature_placement = \"behind\"\n"), HasSubstr("deploy.feature_placement"));
+  EXPECT_THAT(refusal("[analysis]\ncell_scale = 0.0\n"), HasSubstr("analysis.cell_scale = 0"));
+  // and the consistent combinations pass
+  const RunConfig ok = parse_config("", "test", {"deploy.early_step=1000", "analysis.alone_protocol=training_length",
+                                                 "agents.population=150", "connectors.batch_pairs=50",
+                                                 "deploy.uniform_agents=held_out"});
+  EXPECT_EQ(ok.deploy.early_step, 1000);
+  EXPECT_EQ(ok.deploy.uniform_agents, "held_out");
+}
+
 }  // namespace divcoll::io

@@ -105,4 +105,12 @@ for b in 1 2 3; do
   head -1 "$W/bad.log"
   [ "$b" = 3 ] || grep -q "variant long_deploy" "$W/bad.log" || fail "bad study $b: the message does not name the variant"
 done
+echo "== the reduced study file of the real question validates, and its plan reuses what it can"
+"$D" study "$SRC/configs/studies/claims.toml" --out "$W/claims" --plan > "$W/plan.log" || { cat "$W/plan.log"; fail "claims.toml is refused"; }
+[ ! -e "$W/claims" ] || fail "--plan wrote the study folder"
+grep -q "= 65 runs" "$W/plan.log" || fail "claims.toml: not 13 variants x 5 seeds"
+grep -q "training_length/seed3.h5: computes analysis, reuses baseline/seed3.h5" "$W/plan.log" || fail "an analysis-key variant does not reuse deploy"
+grep -q "alone_runway_mean/seed1.h5: computes deploy,analysis, reuses baseline/seed1.h5" "$W/plan.log" || fail "a deploy-key variant does not reuse the connectors"
+grep -q "weak_k1000/seed5.h5: computes connectors,deploy,analysis, reuses baseline/seed5.h5" "$W/plan.log" || fail "a connectors-key variant does not reuse the agents"
+grep -q "weak_agents/seed2.h5: computes agents,connectors,deploy,analysis$" "$W/plan.log" || fail "an agents-key variant reuses something"
 echo "study: passed"

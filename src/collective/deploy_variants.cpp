@@ -1,0 +1,38 @@
+#include "collective/deploy_variants.hpp"
+
+#include <limits>
+
+#include "collective/pairs.hpp"
+#include "common/check.hpp"
+
+namespace divcoll::collective {
+
+std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg) {
+  std::vector<std::pair<int, int>> p = uniform_pairs(cfg.deploy.pairs);
+  if (cfg.deploy.uniform_agents == "held_out")
+    for (auto& [a, b] : p) a += cfg.connectors.batch_pairs, b += cfg.connectors.batch_pairs;
+  return p;
+}
+
+double alone_feature_offset(const io::RunConfig& cfg, const Agent& a) {
+  const std::string& f = cfg.deploy.feature_placement;
+  if (f == "pair_mean") return 0.5 * (body_length(a) + 0.05);
+  if (f == "rear") return body_length(a) + 0.05;
+  return 0.0;
+}
+
+double travel_at(const sim::RunResult& r, int masses, int step) {
+  if (r.status != sim::Status::ok) return std::numeric_limits<double>::quiet_NaN();
+  const int N = masses;
+  DIVCOLL_DEMAND(N > 0 && step >= 0 && r.x.size() >= static_cast<size_t>(step + 1) * N * 2);
+  const double* x0 = r.x.data();
+  const double* xs = r.x.data() + static_cast<size_t>(step) * N * 2;
+  double s = 0, s0 = 0;
+  for (int i = 0; i < N; ++i) {
+    s += xs[2 * i];
+    s0 += x0[2 * i];
+  }
+  return s / N - s0 / N;
+}
+
+}  // namespace divcoll::collective
