@@ -74,7 +74,38 @@ inline v4 loadw(const double* p) {
   return r;
 }
 inline void storew(double* p, v4 v) { std::memcpy(p, &v, sizeof v); }
-inline v4 splat(double x) { return v4{} + x; }
+// stores NV vectors' first n values (n ≤ kW·NV) at p: whole vectors directly, the last partial one masked
+// (or through a buffer without AVX-512); a call of memmove per column cost more than the copy itself
+template <int NV>
+inline void store_n(double* p, const v4* a, int n) {
+  for (int v = 0; v < NV; ++v) {
+    const int left = n - kW * v;
+    if (left >= kW) {
+      storew(p + kW * v, a[v]);
+    } else if (left > 0) {
+#if defined(__AVX512F__)
+      _mm512_mask_storeu_pd(p + kW * v, static_cast<__mmask8>((1u << left) - 1), reinterpret_cast<__m512d>(a[v]));
+#else
+      double buf[kW];
+      storew(buf, a[v]);
+      for (int q = 0; q < left; ++q) p[kW * v + q] = buf[q];
+#endif
+    }
+  }
+}
+// x in every lane, as a broadcast (from memory when x is a load: the load port does it). Not v4{} + x: that
+// costs a scalar add and a register broadcast on the ports the fused multiply-adds need, per input value
+inline v4 splat(double x) {
+#if defined(__AVX512F__)
+  return reinterpret_cast<v4>(_mm512_set1_pd(x));
+#elif defined(__AVX__)
+  return reinterpret_cast<v4>(_mm256_set1_pd(x));
+#else
+  v4 r;
+  for (int k = 0; k < kW; ++k) r[k] = x;
+  return r;
+#endif
+}
 inline v4i bits(v4 x) { return reinterpret_cast<v4i>(x); }
 inline v4 from_bits(v4i x) { return reinterpret_cast<v4>(x); }
 constexpr int round_w(int n) { return (n + kW - 1) / kW * kW; }
@@ -158,11 +189,7 @@ inline void layer_forward_g(const double* const* Wt, int ld, const double* const
         a[g * NV + v] = fmadd(loadw(Wt[g] + static_cast<size_t>(i) * ld + kW * v), x[g][i], a[g * NV + v]);
   for (int v = 0; v < G * NV; ++v) a[v] += c[v];
   if constexpr (TANH) tanh_n<G * NV>(a);
-  for (int g = 0; g < G; ++g) {
-    double buf[kW * NV];
-    for (int v = 0; v < NV; ++v) storew(buf + kW * v, a[g * NV + v]);
-    std::copy(buf, buf + n_out, y[g]);
-  }
+  for (int g = 0; g < G; ++g) store_n<NV>(y[g], a + g * NV, n_out);
 }
 // as many of n columns as one call takes (up to 16 accumulators live: G·NV ≤ 8); returns how many it took
 template <int NV, bool TANH>
@@ -210,9 +237,8 @@ inline void layer_input_grad(const double* Wp, int ld, int out, const double* g,
   }
   if (o < out)
     for (int v = 0; v < NV; ++v) a[v] = fmadd(loadw(Wp + static_cast<size_t>(o) * ld + kW * v), g[o], a[v]);
-  double buf[kW * NV];
-  for (int v = 0; v < NV; ++v) storew(buf + kW * v, a[v] + c[v]);
-  std::copy(buf, buf + n_in, d);
+  for (int v = 0; v < NV; ++v) a[v] += c[v];
+  store_n<NV>(d, a, n_in);
 }
 
 // rows o of the weight gradient, inputs [i0, i0 + kW·NV) (whole vectors only): row += Σ_c g_c[o] x_c, the
