@@ -94,15 +94,16 @@ class Run:
         return float(np.mean(arr[self.novel]))
 
 
-def alone_under_protocol(f, alone):
-    """agents alone's per-environment means under the stored config's analysis.alone_protocol: same_length (the
-    deployment's travel, as the collectives'), training_length (travel at deploy.early_step), training_rate
-    (deployment travel × connectors.episode_steps / deploy.episode_steps); see `divcoll keys`"""
+def alone_under_protocol(f, alone, protocol=None):
+    """agents alone's per-environment means under the stored config's analysis.alone_protocol (or `protocol`, a
+    reading applied at report time): same_length (the deployment's travel, as the collectives'), training_length
+    (travel at deploy.early_step), training_rate (deployment travel × connectors.episode_steps /
+    deploy.episode_steps); see `divcoll keys`. `alone` is the same-length means."""
     try:
         cfg = tomllib.loads(_s(f.attrs["config"]))
     except (KeyError, tomllib.TOMLDecodeError):
         return alone
-    protocol = cfg.get("analysis", {}).get("alone_protocol", "same_length")
+    protocol = protocol or cfg.get("analysis", {}).get("alone_protocol", "same_length")
     if protocol == "training_length":
         d = f["deploy"]
         return summary.env_means(d["agents/travel_bl_early"][()], d["agents/status"][()])[0]

@@ -20,7 +20,9 @@ stage. "Comparable" claims (no difference expected) are the other way round: hol
 from __future__ import annotations
 
 import argparse
+import copy
 import os
+import subprocess
 import sys
 import tomllib
 
@@ -239,23 +241,76 @@ def load_manifest(folder):
     return m
 
 
-def evaluate(folder, manifest):
-    """{variant: {"seeds": [...], "runs": [claims.Run], "cells": [(claim text, mean, lo, hi, n, verdict, held, n_eval)]}}"""
-    out = {}
+# claims whose verdict or effect reads agents alone (the only numbers analysis.alone_protocol changes)
+ALONE_CLAIMS = {C.c_agents_drop, C.c_trained_beat_alone, C.c_weak_diverse_most_envs, C.c_graded}
+# report-time readings of analysis.alone_protocol: a run made with same_length is also read under each of these
+# (claims.alone_under_protocol); training_length needs deploy.early_step
+READINGS = [("training_length", "agents alone at their training length (travel at deploy.early_step), collectives "
+                                "over the deployment"),
+            ("training_rate", "agents alone's deployment travel × connectors.episode_steps / deploy.episode_steps")]
+
+
+def reread(run, protocol):
+    """a copy of the claims.Run with agents alone read under `protocol` (None when the run cannot be)"""
+    import h5py
+    import summary
+    if not run.has["deploy"]:
+        return None
+    with h5py.File(run.path, "r") as f:
+        cfg = tomllib.loads(C._s(f.attrs["config"]))
+        if protocol == "training_length" and (cfg.get("deploy", {}).get("early_step", 0) <= 0
+                                              or "agents/travel_bl_early" not in f["deploy"]):
+            return None
+        d = f["deploy"]
+        same, _ = summary.env_means(d["agents/travel_bl"][()], d["agents/status"][()])
+        alone = C.alone_under_protocol(f, same, protocol)
+    r = copy.copy(run)
+    r.alone = alone
+    return r
+
+
+def columns(folder, manifest):
+    """[(column name, source variant, protocol or None, overrides, doc, [(seed, claims.Run)])]: each variant, then
+    its runs read under each report-time reading when they were made with analysis.alone_protocol = same_length"""
+    out = []
     for v in manifest["variant"]:
-        runs, seeds = [], []
+        runs = []
         for r in manifest["run"]:
             if r["variant"] != v["name"] or r["status"] != "complete":
                 continue
             path = os.path.join(folder, r["path"])
             if os.path.exists(path):
-                runs.append(C.Run(path))
-                seeds.append(r["seed"])
+                runs.append((r["seed"], C.Run(path)))
+        out.append((v["name"], v["name"], None, list(v["set"]), v.get("doc", ""), runs))
+        if any("analysis.alone_protocol=" in s for s in v["set"]):
+            continue
+        if any(C.config(run.path).get("analysis", {}).get("alone_protocol", "same_length") != "same_length"
+               for _, run in runs):
+            continue
+        for protocol, doc in READINGS:
+            rr = [(seed, x) for seed, x in ((seed, reread(run, protocol)) for seed, run in runs) if x is not None]
+            if runs and not rr:
+                continue
+            out.append((f"{v['name']} · {protocol}", v["name"], protocol,
+                        list(v["set"]) + [f"analysis.alone_protocol={protocol} (read at report time)"],
+                        f"{v.get('doc', '')}; read with {doc}", rr))
+    return out
+
+
+def evaluate(folder, manifest):
+    """{column: {"source", "protocol", "set", "doc", "seeds", "runs", "cells": [(claim text, mean, lo, hi, n,
+    verdict, held, n_eval)]}}; a report-time reading's cells of claims that do not read agents alone are
+    verdict "as source" (the same numbers as its source variant's column)"""
+    out = {}
+    for name, source, protocol, sets, doc, runs in columns(folder, manifest):
         cells = []
         for text, fn in C.CLAIMS:
             eff, _, _, equal = EFFECTS[fn]
+            if protocol is not None and fn not in ALONE_CLAIMS:
+                cells.append((text, float("nan"), float("nan"), float("nan"), 0, "as source", 0, 0))
+                continue
             values, held, measured = [], 0, 0
-            for run in runs:
+            for _, run in runs:
                 try:
                     _, vd = fn(run)
                     e = eff(run)
@@ -267,8 +322,75 @@ def evaluate(folder, manifest):
                 values.append(e)
             m, lo, hi, n = t_interval(values)
             cells.append((text, m, lo, hi, n, verdict(m, lo, hi, n, equal), held, measured))
-        out[v["name"]] = {"seeds": seeds, "runs": runs, "cells": cells}
+        out[name] = {"source": source, "protocol": protocol, "set": sets, "doc": doc,
+                     "seeds": [s for s, _ in runs], "runs": [r for _, r in runs], "cells": cells}
     return out
+
+
+def provenance(folder, manifest):
+    """text: the divcoll commits of the complete run files, and the commit of this postprocessing tree"""
+    import h5py
+    commits = set()
+    for r in manifest["run"]:
+        path = os.path.join(folder, r["path"])
+        if r["status"] == "complete" and os.path.exists(path):
+            with h5py.File(path, "r") as f:
+                for a in ("git_commit", "base_git_commit"):
+                    if a in f.attrs:
+                        commits.add(C._s(f.attrs[a]))
+    try:
+        here = subprocess.run(["git", "-C", HERE, "describe", "--always", "--dirty", "--abbrev=12"],
+                              capture_output=True, text=True, timeout=30).stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        here = "unknown"
+    return (f"Run files made by divcoll {', '.join(sorted(commits)) or '—'}; page written by postprocess/ at "
+            f"{here}.")
+
+
+# ---- the summary figure: every claim's effect per column --------------------------------------------------------
+
+def summary_figure(res, path):
+    """one panel per claim measured in some column: mean effect and its t 95% interval over seeds per column"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    names = list(res)
+    rows = [i for i in range(len(C.CLAIMS)) if any(res[c]["cells"][i][4] > 0 for c in names)]
+    if not rows:
+        return False
+    ncol = 4
+    nrow = (len(rows) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.5 * nrow), squeeze=False)
+    colors = {"holds": "#1a9641", "fails": "#d7191c", "unresolved": "#777777", "too few seeds": "#bbbbbb"}
+    for ax, i in zip(axes.flat, rows):
+        text, fn = C.CLAIMS[i]
+        shown = [c for c in names if res[c]["cells"][i][4] > 0 and np.isfinite(res[c]["cells"][i][1])]
+        for k, c in enumerate(shown):
+            _, m, lo, hi, n, vd, _, _ = res[c]["cells"][i]
+            col = colors.get(vd, "#777777")
+            if np.isfinite(lo):
+                ax.errorbar(k, m, yerr=[[m - lo], [hi - m]], fmt="o", color=col, capsize=3, markersize=4)
+            else:
+                ax.plot(k, m, "o", color=col, markersize=4)
+        ax.axhline(0, color="black", linewidth=0.6)
+        ax.set_xticks(range(len(shown)))
+        ax.set_xticklabels([c.replace(" · ", "\n· ").replace("_", " ") for c in shown], fontsize=5, rotation=60,
+                           ha="right")
+        ax.set_xlim(-0.5, len(shown) - 0.5)
+        words = text.split()
+        title = " ".join(words[:9]) + (" …" if len(words) > 9 else "")
+        ax.set_title(title, fontsize=6)
+        unit = EFFECTS[fn][2]
+        ax.set_ylabel(f"effect ({unit})" if unit else "effect", fontsize=6)
+        ax.tick_params(axis="y", labelsize=6)
+    for ax in list(axes.flat)[len(rows):]:
+        ax.axis("off")
+    fig.suptitle("Claims × variants: effect (positive = the paper's direction), mean and t 95% interval over seeds; "
+                 "green holds, red fails, grey unresolved / too few seeds", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
 
 
 # ---- Fig. 2A per variant ----------------------------------------------------------------------------------------
@@ -322,21 +444,28 @@ def write_page(folder, out):
     res = evaluate(folder, man)
     fig_dir = os.path.join(out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
-    variants = [v["name"] for v in man["variant"]]
+    variants = list(res)
     done = sum(1 for r in man["run"] if r["status"] == "complete")
     lines = [f"# Robustness of the paper's claims: study {man['name']}", ""]
     if man.get("doc"):
         lines += [man["doc"], ""]
     lines += [f"Study folder `{os.path.abspath(folder)}`; base config `{man['base']}`; seeds "
               f"{', '.join(map(str, man['seeds']))}; {done} of {len(man['run'])} runs complete. Every run: "
-              + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ".", "",
+              + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ". "
+              + provenance(folder, man), "",
               "| variant | overrides | reading | runs (seeds) | reuses |", "|---|---|---|---|---|"]
-    for v in man["variant"]:
-        rs = [r for r in man["run"] if r["variant"] == v["name"]]
+    for name, col in res.items():
+        rs = [r for r in man["run"] if r["variant"] == col["source"]]
         reuse = sorted({f"{r['reuses'].split('/')[0]} (before {r['from']})" for r in rs if r["reuses"]})
-        lines.append(f"| {v['name']} | {', '.join(f'`{s}`' for s in v['set']) or '—'} | {v.get('doc', '')} | "
-                     f"{len(res[v['name']]['seeds'])} ({', '.join(map(str, res[v['name']]['seeds']))}) | "
-                     f"{', '.join(reuse) or '—'} |")
+        if col["protocol"] is not None:
+            reuse = [f"the runs of {col['source']}"]
+        lines.append(f"| {name} | {', '.join(f'`{s}`' for s in col['set']) or '—'} | {col['doc']} | "
+                     f"{len(col['seeds'])} ({', '.join(map(str, col['seeds']))}) | {', '.join(reuse) or '—'} |")
+    if any(col["protocol"] for col in res.values()):
+        lines += ["", "Columns `V · PROTOCOL` are variant V's run files read with `analysis.alone_protocol = PROTOCOL` "
+                      "at report time: that key changes only the agents-alone numbers claims.py compares with, so only "
+                      "the claims that read agents alone are evaluated again; the others are the same as V's "
+                      "(\"as source\")."]
     first = next((r for r in man["run"] if r["status"] == "complete"), None)
     if first:
         short = C.short_of(C.config(os.path.join(folder, first["path"])), C.NOVEL)
@@ -348,8 +477,10 @@ def write_page(folder, out):
               "Each cell: the claim's effect (positive = the paper's direction; definitions below), mean over seeds "
               f"with its Student t {LEVEL:.0%} interval over seeds, then how many seeds claims.py's own test held "
               f"in, and the verdict (holds: interval above 0; fails: below 0; unresolved: contains 0; too few seeds: "
-              f"fewer than {MIN_SEEDS}).", "",
-              "| claim | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
+              f"fewer than {MIN_SEEDS}).", ""]
+    if summary_figure(res, os.path.join(out, "robustness.png")):
+        lines += ["![every claim's effect per variant](robustness.png)", ""]
+    lines += ["| claim | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
     counts = {v: {} for v in variants}
     for ci, (text, fn) in enumerate(C.CLAIMS):
         unit = EFFECTS[fn][2]
@@ -357,14 +488,14 @@ def write_page(folder, out):
         for v in variants:
             _, m, lo, hi, n, vd, held, meas = res[v]["cells"][ci]
             counts[v][vd] = counts[v].get(vd, 0) + 1
-            if vd == "not measured":
-                row.append("not measured")
+            if vd in ("not measured", "as source"):
+                row.append(vd)
                 continue
             ci_txt = f" [{num(lo)}, {num(hi)}]" if np.isfinite(lo) else ""
             row.append(f"{num(m)}{ci_txt} {unit} · held {held}/{meas} · **{vd}**")
         lines.append("| " + " | ".join(row) + " |")
     lines += ["", "| verdicts | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
-    for vd in ["holds", "fails", "unresolved", "too few seeds", "not measured"]:
+    for vd in ["holds", "fails", "unresolved", "too few seeds", "not measured", "as source"]:
         lines.append(f"| {vd} | " + " | ".join(str(counts[v].get(vd, 0)) for v in variants) + " |")
     lines += ["", "## Effects", "", "| claim | effect (positive = the claim's direction) | unit |", "|---|---|---|"]
     for text, fn in C.CLAIMS:
@@ -372,7 +503,7 @@ def write_page(folder, out):
         lines.append(f"| {text} | {what}{' (holds if the interval contains 0)' if equal else ''} | {unit or '—'} |")
     lines += ["", "## Fig. 2A per variant", ""]
     for v in variants:
-        png = os.path.join(fig_dir, f"fig2a_{v}.png")
+        png = os.path.join(fig_dir, f"fig2a_{v.replace(' · ', '__')}.png")
         if fig2a(v, res[v]["runs"], res[v]["seeds"], png):
             rel = os.path.relpath(png, out)
             lines += [f"### {v}", "", f"![{rel}]({rel})", ""]

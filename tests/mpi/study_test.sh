@@ -72,26 +72,48 @@ done
 
 echo "== the robustness page"
 "$D" report "$W/a" --out "$W/page" > "$W/page.log" 2>&1 || { cat "$W/page.log"; fail "divcoll report DIR failed"; }
-/usr/bin/python3 - "$SRC/postprocess" "$W/page/robustness.md" <<'EOF' || fail "the robustness page lacks cells"
-import sys
+/usr/bin/python3 - "$SRC/postprocess" "$W/page/robustness.md" "$W/a" <<'EOF' || fail "the robustness page lacks cells"
+import os, sys
 sys.path.insert(0, sys.argv[1])
-import claims
+import h5py, numpy as np
+import claims, robustness, summary
+table = open(sys.argv[2]).read().split("## Claims × variants")[1].split("## Effects")[0]
+header = [l for l in table.splitlines() if l.startswith("| claim |")][0]
+cols = [c.strip() for c in header.strip().strip("|").split("|")][1:]
+# each variant, then its runs read under the report-time protocols (tiny.toml records deploy.early_step)
+want = [f"{v}{r}" for v in ["baseline", "long_deploy"] for r in ["", " · training_length", " · training_rate"]]
+assert cols == want, cols
 rows = {}
-for line in open(sys.argv[2]).read().split("## Claims × variants")[1].split("## Effects")[0].splitlines():
+for line in table.splitlines():
     cells = [c.strip() for c in line.strip().strip("|").split("|")]
-    if len(cells) == 3 and cells[0] in [t for t, _ in claims.CLAIMS]:
+    if len(cells) == 1 + len(cols) and cells[0] in [t for t, _ in claims.CLAIMS]:
         rows[cells[0]] = cells[1:]
 missing = [t for t, _ in claims.CLAIMS if t not in rows]
 assert not missing, f"claims without a row: {missing}"
+alone_claims = {t for t, fn in claims.CLAIMS if fn in robustness.ALONE_CLAIMS}
 for t, cells in rows.items():
-    for c in cells:
-        # two seeds: every measured cell is "too few seeds", never a verdict
-        assert c == "not measured" or c.endswith("**too few seeds**"), (t, c)
-measured = sum(c != "not measured" for cs in rows.values() for c in cs)
+    for col, c in zip(cols, cells):
+        # two seeds: every measured cell is "too few seeds", never a verdict; a reading re-evaluates only the
+        # claims that read agents alone
+        if "·" in col and t not in alone_claims:
+            assert c == "as source", (t, col, c)
+        else:
+            assert c == "not measured" or c.endswith("**too few seeds**"), (t, col, c)
+measured = sum(c.endswith("**too few seeds**") for cs in rows.values() for c in cs)
 assert measured >= 2 * 12, f"only {measured} measured cells"
-print(f"{len(rows)} claims x 2 variants, {measured} cells measured")
+# the readings: agents alone at deploy.early_step, and the deployment travel scaled to the training length
+run = claims.Run(os.path.join(sys.argv[3], "baseline/seed1.h5"))
+cfg = claims.config(run.path)
+with h5py.File(run.path, "r") as f:
+    early = summary.env_means(f["deploy/agents/travel_bl_early"][()], f["deploy/agents/status"][()])[0]
+np.testing.assert_array_equal(robustness.reread(run, "training_length").alone, early)
+np.testing.assert_allclose(robustness.reread(run, "training_rate").alone,
+                           run.alone * cfg["connectors"]["episode_steps"] / cfg["deploy"]["episode_steps"], rtol=1e-12)
+assert not np.array_equal(early, run.alone)
+print(f"{len(rows)} claims x {len(cols)} columns, {measured} cells measured; readings checked")
 EOF
-for v in baseline long_deploy; do [ -s "$W/page/figures/fig2a_$v.png" ] || fail "no Fig. 2A for $v"; done
+for v in baseline long_deploy baseline__training_length; do [ -s "$W/page/figures/fig2a_$v.png" ] || fail "no Fig. 2A for $v"; done
+[ -s "$W/page/robustness.png" ] || fail "no summary figure"
 
 echo "== bad study files are refused before any work"
 sed 's/set = \["deploy.episode_steps=300"\]/set = ["deploy.episode_stepz=300"]/' "$STUDY" > "$W/bad1.toml"
