@@ -130,12 +130,18 @@ bool prepare_resume(MPI_Comm comm, const std::string& run_path) {
     std::string why;
     const std::string ck = checkpoint_path(run_path);
     const bool have_run = fs::exists(run_path), have_ck = fs::exists(ck);
-    if (have_run && valid_run_file(run_path, &why)) {
-      decision = true;
-    } else if (have_ck && valid_run_file(ck, nullptr)) {
-      if (have_run) std::printf("resume: %s is damaged (%s); restoring the checkpoint %s\n", run_path.c_str(), why.c_str(), ck.c_str());
+    // the checkpoint first: only a checkpoint is a committed whole. What a killed job left in the run file
+    // after its last checkpoint may hold a round's state without its counter (or the reverse: HDF5 writes its
+    // cached metadata when it likes), and the rounds after the checkpoint are redone anyway
+    if (have_ck && valid_run_file(ck, nullptr)) {
+      if (have_run && !valid_run_file(run_path, &why))
+        std::printf("resume: %s is damaged (%s); restoring the checkpoint %s\n", run_path.c_str(), why.c_str(), ck.c_str());
+      else if (have_run)
+        std::printf("resume: continuing from the checkpoint %s\n", ck.c_str());
       // a copy under a new inode: the checkpoint itself stays as it is until the next one replaces it
       atomic_copy(ck, run_path, false);
+      decision = true;
+    } else if (have_run && valid_run_file(run_path, &why)) {
       decision = true;
     } else if (have_run) {
       throw InputError(msg() << run_path << " cannot be resumed: " << why << ", and it has no usable checkpoint"

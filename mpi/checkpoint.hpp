@@ -20,7 +20,8 @@ void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path);
 // rank-local: a divcoll run file whose every dataset reads back; `why` says what is wrong otherwise
 bool valid_run_file(const std::string& path, std::string* why);
 
-// rank 0 decides what to resume from and restores the checkpoint if the run file is damaged; returns
+// rank 0 decides what to resume from: the checkpoint when there is one that reads back (it replaces the run
+// file), else the run file as it is (a finished run's, whose checkpoint is removed); returns
 // (on every rank) true if there is a run to continue, false if the run must start from nothing.
 // Throws InputError if `run_path` exists, is damaged and has no checkpoint.
 bool prepare_resume(MPI_Comm comm, const std::string& run_path);

@@ -50,9 +50,9 @@ struct TrainSpec {
   int iterations = 0, batch_pairs = 0, episode_steps = 0;
 };
 
-// trains every slot in lock-step over the task farm (optimizer settings from cfg.connectors), resuming
-// from the state group's checkpointed state; writes curves per iteration and <group>/params at the end;
-// returns the trained weights on every rank
+// trains every slot in lock-step: the connectors plan (mpi/connectors_plan.cpp; the plain one, or the
+// extended one when any of issue 9.2's keys asks for it) run by the driver (mpi/driver.hpp), resuming from
+// the state group's committed state; returns the trained weights on every rank
 std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                                                   const std::vector<collective::Agent>& agents,
                                                   const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
@@ -64,20 +64,6 @@ struct SlotGroups {
   std::vector<int> columns;
 };
 SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots);
-// row `row` of each group's (rows × columns) dataset <group>/<name> from the master's per-slot values
-void write_slot_row(io::h5::File& file, bool master, const SlotGroups& g, const std::vector<ConnectorSlot>& slots,
-                    const std::string& name, int rows, int row, const std::vector<double>& per_slot);
-// <group>/params (columns × P_c) from the master's weights, then the weights broadcast to every rank
-void write_trained_params(MPI_Comm comm, io::h5::File& file, const SlotGroups& g,
-                          const std::vector<ConnectorSlot>& slots, std::vector<std::vector<double>>& params);
-
-// the same with the optimisation keys of issue 9.2 (mpi/connector_opt_stage.cpp); train_connectors calls it
-// when collective::extended(...) of the config's [connectors] keys
-std::vector<std::vector<double>> train_connectors_extended(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                                                           const std::vector<collective::Agent>& agents,
-                                                           const std::vector<ConnectorSlot>& slots,
-                                                           const TrainSpec& spec,
-                                                           const std::function<void()>& checkpoint);
 
 void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                           const std::function<void()>& checkpoint);

@@ -79,8 +79,8 @@ int main(int argc, char** argv) {
   mv->add_flag("--quick", mov.quick, "fewer frames and environments (tests)");
 
   cli::BenchArgs bench;
-  auto* b = app.add_subcommand("bench", "steps per second per core, and speed against error");
-  b->add_option("--seconds", bench.seconds, "minimum timed seconds per row")->check(CLI::Range(0.01, 600.0));
+  auto* b = app.add_subcommand("bench", "steps per CPU-second of one core, and speed against error");
+  b->add_option("--seconds", bench.seconds, "minimum CPU seconds timed per row")->check(CLI::Range(0.01, 600.0));
   b->add_flag("--quick", bench.quick, "fewer rows");
   b->add_option("--config", bench.config, "run config whose weak connector stiffness to use (default: the paper's)")
       ->check(CLI::ExistingFile);

@@ -303,6 +303,10 @@ int run_session(const RunArgs& args) {
       DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
       DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
     });
+    // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
+    // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
+    arm_stop_signals(rank, cfg.run.stop_grace_s);
+    MPI_Barrier(MPI_COMM_WORLD);
     // one writer per run file: taken before anything is written (the lock also covers the checkpoint)
     std::string note;
     agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
@@ -386,13 +390,10 @@ int run_session(const RunArgs& args) {
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once
-    arm_stop_signals(rank, cfg.run.stop_grace_s);
     auto ckpt = [&] {
       checkpoint(MPI_COMM_WORLD, file, path);
       stop_point(MPI_COMM_WORLD);
     };
-    if (!existing) ckpt();
     file.write_int("ranks", size);
     if (rank == 0)
       std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
@@ -409,6 +410,9 @@ int run_session(const RunArgs& args) {
         {"scaling", run_scaling_stage},         {"graded", run_graded_stage},
         {"analysis", run_analysis_stage}};
     try {
+      // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
+      // takes effect here
+      if (!existing) ckpt();
       for (const auto& [name, fn] : stages) {
         if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
         if (file.has(name) && file.group(name).has_attribute("status") &&

@@ -7,11 +7,13 @@
 # output.checkpoint_every generations or iterations) on --resume, bit-identically. divcoll itself stops right
 # after its next checkpoint on SIGTERM/SIGINT/SIGUSR1 with exit 75 (mpirun forwards only SIGUSR1; on TERM it
 # kills the ranks within a second, which loses at most the work since the last checkpoint). So on the
-# "time is nearly up" signal (SIGUSR1: Slurm's --signal=B:USR1@T, or divcoll_arm_timer under PBS) the run is
-# stopped right after its next checkpoint, or after DIVCOLL_STOP_GRACE_S seconds (default 60) if none comes:
-# at most the work since the last checkpoint is lost, and the time is used up to the checkpoint. Keep the
-# grace well under the warning's lead (120 s): stopping and resubmitting take a few seconds more.
-# SIGTERM/SIGINT (scancel, qdel, Ctrl-C) are passed to the run, which then ends without a continuation.
+# "time is nearly up" signal (SIGUSR1: Slurm's --signal=B:USR1@T, or divcoll_arm_timer under PBS) the run
+# (mpirun or divcoll) is sent SIGUSR1 and every rank stops together right after its next checkpoint (exit 75).
+# If it has not ended after DIVCOLL_STOP_GRACE_S seconds (default 60) it gets SIGTERM (a second signal: it
+# stops at once and keeps its last checkpoint), and SIGKILL 30 s later: at most the work since the last
+# checkpoint is lost. Keep the grace well under the warning's lead (120 s): stopping and resubmitting take a
+# few seconds more. SIGTERM/SIGINT (scancel, qdel, Ctrl-C) are passed to the run, which then ends without a
+# continuation.
 
 divcoll_log() { echo "[divcoll-job $(date -u +%FT%TZ)] $*"; }
 
@@ -54,8 +56,6 @@ divcoll_config_path() {
   fi
 }
 
-# "inode mtime" of a file, or "none": changes whenever a checkpoint is renamed into place
-_divcoll_stamp() { stat -c '%i %.9Y' "$1" 2>/dev/null || echo none; }
 
 # a sleep that a TERM trap can end (kill "$_divcoll_sp"), so that no orphaned sleep outlives the job
 _divcoll_sleep() {
@@ -75,20 +75,25 @@ _divcoll_on_usr1() {
     return 0
   fi
   DIVCOLL_STOPPED=1
-  local grace=${DIVCOLL_STOP_GRACE_S:-60} ckpt="$_divcoll_out.ckpt"
+  local grace=${DIVCOLL_STOP_GRACE_S:-60}
   divcoll_log "time-limit warning: stopping the run after its next checkpoint (at most ${grace} s)"
   (
-    # ended early (the run finished first): take the sleep along; a second warning changes nothing
+    # ended early (the run stopped or finished first): take the sleep along; a second warning changes nothing
     trap 'kill "$_divcoll_sp" 2>/dev/null; exit 0' TERM
     trap '' USR1
-    before=$(_divcoll_stamp "$ckpt")
     end=$((SECONDS + grace))
-    while [ "$SECONDS" -lt "$end" ] && [ "$(_divcoll_stamp "$ckpt")" = "$before" ]; do _divcoll_sleep 0.5; done
-    if [ "$(_divcoll_stamp "$ckpt")" = "$before" ]; then
-      divcoll_log "no checkpoint within ${grace} s: stopping anyway (the run continues from the previous one)"
-    else
-      divcoll_log "checkpoint written: stopping the run"
-    fi
+    # divcoll stops itself right after its next checkpoint on SIGUSR1 (mpirun forwards it to every rank); its
+    # ranks act on it once they have taken the run's lock (OUT.lock, written after the handlers are installed)
+    # — before that, SIGUSR1's default action would end them, so wait for a lock file of this run
+    while [ "$SECONDS" -lt "$end" ] && kill -0 "$_divcoll_pid" 2>/dev/null &&
+      [ "$(stat -c %Y "$_divcoll_out.lock" 2>/dev/null || echo 0)" -lt "$_divcoll_started" ]; do
+      _divcoll_sleep 0.2
+    done
+    kill -0 "$_divcoll_pid" 2>/dev/null || exit 0
+    [ "$SECONDS" -lt "$end" ] && kill -USR1 "$_divcoll_pid" 2>/dev/null
+    while [ "$SECONDS" -lt "$end" ] && kill -0 "$_divcoll_pid" 2>/dev/null; do _divcoll_sleep 0.5; done
+    kill -0 "$_divcoll_pid" 2>/dev/null || exit 0
+    divcoll_log "no checkpoint within ${grace} s: stopping anyway (the run continues from the previous one)"
     kill -TERM "$_divcoll_pid" 2>/dev/null || exit 0
     _divcoll_sleep 30
     kill -KILL "$_divcoll_pid" 2>/dev/null || true
@@ -119,6 +124,7 @@ divcoll_run_resumable() {
   # shellcheck disable=SC2034  # read by the job scripts
   DIVCOLL_STOPPED=0
   divcoll_log "${launch[*]} $DIVCOLL_BIN run $config --out $out --resume $*"
+  _divcoll_started=$(date +%s)
   "${launch[@]}" "$DIVCOLL_BIN" run "$config" --out "$out" --resume "$@" &
   _divcoll_pid=$!
   trap _divcoll_on_usr1 USR1
@@ -141,6 +147,9 @@ divcoll_run_resumable() {
   if [ -n "$_divcoll_stopper" ]; then
     kill "$_divcoll_stopper" 2>/dev/null || true
     wait "$_divcoll_stopper" 2>/dev/null || true
+  fi
+  if [ "$DIVCOLL_STOPPED" = 1 ] && [ "$rc" = 75 ]; then
+    divcoll_log "checkpoint written: the run stopped right after it (status 75)"
   fi
   divcoll_log "the run ended with status $rc"
   return "$rc"

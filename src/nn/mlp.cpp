@@ -74,7 +74,38 @@ inline v4 loadw(const double* p) {
   return r;
 }
 inline void storew(double* p, v4 v) { std::memcpy(p, &v, sizeof v); }
-inline v4 splat(double x) { return v4{} + x; }
+// stores NV vectors' first n values (n ≤ kW·NV) at p: whole vectors directly, the last partial one masked
+// (or through a buffer without AVX-512); a call of memmove per column cost more than the copy itself
+template <int NV>
+inline void store_n(double* p, const v4* a, int n) {
+  for (int v = 0; v < NV; ++v) {
+    const int left = n - kW * v;
+    if (left >= kW) {
+      storew(p + kW * v, a[v]);
+    } else if (left > 0) {
+#if defined(__AVX512F__)
+      _mm512_mask_storeu_pd(p + kW * v, static_cast<__mmask8>((1u << left) - 1), reinterpret_cast<__m512d>(a[v]));
+#else
+      double buf[kW];
+      storew(buf, a[v]);
+      for (int q = 0; q < left; ++q) p[kW * v + q] = buf[q];
+#endif
+    }
+  }
+}
+// x in every lane, as a broadcast (from memory when x is a load: the load port does it). Not v4{} + x: that
+// costs a scalar add and a register broadcast on the ports the fused multiply-adds need, per input value
+inline v4 splat(double x) {
+#if defined(__AVX512F__)
+  return reinterpret_cast<v4>(_mm512_set1_pd(x));
+#elif defined(__AVX__)
+  return reinterpret_cast<v4>(_mm256_set1_pd(x));
+#else
+  v4 r;
+  for (int k = 0; k < kW; ++k) r[k] = x;
+  return r;
+#endif
+}
 inline v4i bits(v4 x) { return reinterpret_cast<v4i>(x); }
 inline v4 from_bits(v4i x) { return reinterpret_cast<v4>(x); }
 constexpr int round_w(int n) { return (n + kW - 1) / kW * kW; }
@@ -129,39 +160,63 @@ inline void tanh_n(v4* x) {
   }
 }
 
-// one layer, one column, outputs [o0, o0 + kW·NV) of a packed layer: z = b + Σ_i Wᵀ[i, ·] x[i], the sum over
-// i in two partial sums (even and odd i) added at the end, then y = tanh(z) if TANH (else y = z, for the
-// caller to take the tanh of several columns at once); n_out (≤ kW·NV) outputs are stored
-template <int NV, bool TANH>
-inline void layer_forward(const double* Wt, int ld, const double* b, int in, const double* x, double* y, int n_out) {
-  v4 a[NV], c[NV];
-  for (int v = 0; v < NV; ++v) a[v] = loadw(b + kW * v), c[v] = v4{};
+// one layer for G columns at once, outputs [o0, o0 + kW·NV) of a packed layer: per column g,
+// z = b + Σ_i Wᵀ[i, ·] x[i], the sum over i in two partial sums (even and odd i) added at the end, then
+// y = tanh(z) if TANH (else y = z, for the caller to take the tanh of several columns at once); n_out (≤ kW·NV)
+// outputs are stored. Each column has its own weights Wt[g], b[g] (one agent's network each) or all share one
+// (the connector springs): the columns' chains are independent and interleaved, so that one column's layer and
+// tanh fill the other's latency; each output is computed with the same operations in the same order as alone.
+template <int NV, int G, bool TANH>
+inline void layer_forward_g(const double* const* Wt, int ld, const double* const* b, int in, const double* const* x,
+                            double* const* y, int n_out) {
+  v4 a[G * NV], c[G * NV];
+  for (int g = 0; g < G; ++g)
+    for (int v = 0; v < NV; ++v) a[g * NV + v] = loadw(b[g] + kW * v), c[g * NV + v] = v4{};
   int i = 0;
-  for (; i + 2 <= in; i += 2) {
-    const double* w0 = Wt + static_cast<size_t>(i) * ld;
-    const double* w1 = w0 + ld;
-    const double x0 = x[i], x1 = x[i + 1];
-    for (int v = 0; v < NV; ++v) {
-      a[v] = fmadd(loadw(w0 + kW * v), x0, a[v]);
-      c[v] = fmadd(loadw(w1 + kW * v), x1, c[v]);
+  for (; i + 2 <= in; i += 2)
+    for (int g = 0; g < G; ++g) {
+      const double* w0 = Wt[g] + static_cast<size_t>(i) * ld;
+      const double* w1 = w0 + ld;
+      const double x0 = x[g][i], x1 = x[g][i + 1];
+      for (int v = 0; v < NV; ++v) {
+        a[g * NV + v] = fmadd(loadw(w0 + kW * v), x0, a[g * NV + v]);
+        c[g * NV + v] = fmadd(loadw(w1 + kW * v), x1, c[g * NV + v]);
+      }
     }
-  }
   if (i < in)
-    for (int v = 0; v < NV; ++v) a[v] = fmadd(loadw(Wt + static_cast<size_t>(i) * ld + kW * v), x[i], a[v]);
-  for (int v = 0; v < NV; ++v) a[v] += c[v];
-  if constexpr (TANH) tanh_n<NV>(a);
-  double buf[kW * NV];
-  for (int v = 0; v < NV; ++v) storew(buf + kW * v, a[v]);
-  std::copy(buf, buf + n_out, y);
+    for (int g = 0; g < G; ++g)
+      for (int v = 0; v < NV; ++v)
+        a[g * NV + v] = fmadd(loadw(Wt[g] + static_cast<size_t>(i) * ld + kW * v), x[g][i], a[g * NV + v]);
+  for (int v = 0; v < G * NV; ++v) a[v] += c[v];
+  if constexpr (TANH) tanh_n<G * NV>(a);
+  for (int g = 0; g < G; ++g) store_n<NV>(y[g], a + g * NV, n_out);
 }
-template <int NV>
-inline void layer_forward_tanh(const double* Wt, int ld, const double* b, int in, const double* x, double* y, int n_out) {
-  layer_forward<NV, true>(Wt, ld, b, in, x, y, n_out);
+// as many of n columns as one call takes (up to 16 accumulators live: G·NV ≤ 8); returns how many it took
+template <int NV, bool TANH>
+inline int layer_forward_some(int n, const double* const* Wt, int ld, const double* const* b, int in,
+                              const double* const* x, double* const* y, int n_out) {
+  constexpr int GM = NV >= 5 ? 1 : 8 / NV;
+  if constexpr (GM >= 8)
+    if (n >= 8) return layer_forward_g<NV, 8, TANH>(Wt, ld, b, in, x, y, n_out), 8;
+  if constexpr (GM >= 4)
+    if (n >= 4) return layer_forward_g<NV, 4, TANH>(Wt, ld, b, in, x, y, n_out), 4;
+  if constexpr (GM >= 2)
+    if (n >= 2) return layer_forward_g<NV, 2, TANH>(Wt, ld, b, in, x, y, n_out), 2;
+  return layer_forward_g<NV, 1, TANH>(Wt, ld, b, in, x, y, n_out), 1;
 }
-template <int NV>
-inline void layer_forward_affine(const double* Wt, int ld, const double* b, int in, const double* x, double* y,
-                                 int n_out) {
-  layer_forward<NV, false>(Wt, ld, b, in, x, y, n_out);
+template <bool TANH>
+inline int layer_forward_dispatch(int nv, int n, const double* const* Wt, int ld, const double* const* b, int in,
+                                  const double* const* x, double* const* y, int n_out) {
+  switch (nv) {
+    case 1: return layer_forward_some<1, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 2: return layer_forward_some<2, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 3: return layer_forward_some<3, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 4: return layer_forward_some<4, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 5: return layer_forward_some<5, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 6: return layer_forward_some<6, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    case 7: return layer_forward_some<7, TANH>(n, Wt, ld, b, in, x, y, n_out);
+    default: return layer_forward_some<8, TANH>(n, Wt, ld, b, in, x, y, n_out);
+  }
 }
 
 // one column of the input gradient, inputs [i0, i0 + kW·NV): d = Σ_o W[o, ·] g[o] (rows padded), the sum over
@@ -182,9 +237,8 @@ inline void layer_input_grad(const double* Wp, int ld, int out, const double* g,
   }
   if (o < out)
     for (int v = 0; v < NV; ++v) a[v] = fmadd(loadw(Wp + static_cast<size_t>(o) * ld + kW * v), g[o], a[v]);
-  double buf[kW * NV];
-  for (int v = 0; v < NV; ++v) storew(buf + kW * v, a[v] + c[v]);
-  std::copy(buf, buf + n_in, d);
+  for (int v = 0; v < NV; ++v) a[v] += c[v];
+  store_n<NV>(d, a, n_in);
 }
 
 // rows o of the weight gradient, inputs [i0, i0 + kW·NV) (whole vectors only): row += Σ_c g_c[o] x_c, the
@@ -265,29 +319,54 @@ void tanh_inplace(double* p, int n) {
   }
 }
 
-void forward_packed(const Layout& L, const double* packed, int cols, double* acts) {
+namespace {
+// the layers of n single-column networks; net g's weights are packed + g·packed_stride and its activations of
+// layer l are at act(g, l). A layer narrower than a vector (the connector's output) with shared weights
+// takes its tanh over all columns at once afterwards (tanh is elementwise: the same bits either way).
+template <class Act>
+void forward_nets(const Layout& L, const double* packed, size_t packed_stride, int n, Act act, double* shared_y) {
+  constexpr int kChunk = 8;
   for (int l = 0; l < L.n_layers(); ++l) {
     const PackedLayer p = packed_layer(L, l);
-    const double* X = acts + static_cast<size_t>(L.activation_offset(l)) * cols;
-    double* Y = acts + static_cast<size_t>(L.activation_offset(l + 1)) * cols;
-    // a layer narrower than a vector (the connector's output) takes the tanh of all its columns at once
-    const bool narrow = p.out < kW && cols > 1;
-    for (int c = 0; c < cols; ++c) {
-      const double* x = X + static_cast<size_t>(c) * p.in;
-      double* y = Y + static_cast<size_t>(c) * p.out;
-      for (int o0 = 0; o0 < p.out; o0 += kBlock) {
-        const int n = std::min(kBlock, p.out - o0);
-        if (narrow) {
-          DIVCOLL_NN_DISPATCH((n + kW - 1) / kW, layer_forward_affine, packed + p.wt + o0, p.outp, packed + p.b + o0,
-                              p.in, x, y + o0, n)
-        } else {
-          DIVCOLL_NN_DISPATCH((n + kW - 1) / kW, layer_forward_tanh, packed + p.wt + o0, p.outp, packed + p.b + o0,
-                              p.in, x, y + o0, n)
+    const bool narrow = p.out < kW && shared_y && n > 1;
+    for (int o0 = 0; o0 < p.out; o0 += kBlock) {
+      const int no = std::min(kBlock, p.out - o0);
+      const int nv = (no + kW - 1) / kW;
+      for (int g0 = 0; g0 < n;) {
+        const double* Wt[kChunk];
+        const double* b[kChunk];
+        const double* x[kChunk];
+        double* y[kChunk];
+        const int m = std::min(kChunk, n - g0);
+        for (int g = 0; g < m; ++g) {
+          const double* P = packed + (g0 + g) * packed_stride;
+          Wt[g] = P + p.wt + o0;
+          b[g] = P + p.b + o0;
+          x[g] = act(g0 + g, l);
+          y[g] = act(g0 + g, l + 1) + o0;
         }
+        for (int g = 0; g < m;)
+          g += narrow ? layer_forward_dispatch<false>(nv, m - g, Wt + g, p.outp, b + g, p.in, x + g, y + g, no)
+                      : layer_forward_dispatch<true>(nv, m - g, Wt + g, p.outp, b + g, p.in, x + g, y + g, no);
+        g0 += m;
       }
     }
-    if (narrow) tanh_inplace(Y, p.out * cols);
+    if (narrow) tanh_inplace(shared_y + static_cast<size_t>(L.activation_offset(l + 1)) * n, p.out * n);
   }
+}
+}  // namespace
+
+void forward_packed(const Layout& L, const double* packed, int cols, double* acts) {
+  forward_nets(
+      L, packed, 0, cols,
+      [&](int c, int l) { return acts + static_cast<size_t>(L.activation_offset(l)) * cols + static_cast<size_t>(c) * L.sizes[l]; },
+      acts);
+}
+
+void forward_packed_nets(const Layout& L, const double* packed, size_t packed_stride, int n, double* acts) {
+  const size_t na = L.activation_count();
+  forward_nets(L, packed, packed_stride, n, [&](int g, int l) { return acts + g * na + L.activation_offset(l); },
+               nullptr);
 }
 
 void forward(const Layout& L, const double* params, int cols, double* acts) {
@@ -320,12 +399,28 @@ void backward_packed(const Layout& L, const double* packed, int cols, const doub
           const int nv = std::min(8, (in4 - i0) / kW);
           DIVCOLL_NN_DISPATCH(nv, weight_grad_row, row + i0, X + i0, in, g_cur, out, cols, o)
         }
+        // the inputs past the last whole vector, and the bias, in registers across the columns (in order);
+        // through memory each column's update waited on the previous one's store
+        const int nt = in - in4;
+        double bias = gb[o];
+#if defined(__AVX512F__)
+        const __mmask8 mk = static_cast<__mmask8>((1u << nt) - 1);
+        __m512d tail = _mm512_maskz_loadu_pd(mk, row + in4);
+        for (int c = 0; c < cols; ++c) {
+          const double go = g_cur[static_cast<size_t>(c) * out + o];
+          tail = _mm512_fmadd_pd(_mm512_maskz_loadu_pd(mk, X + static_cast<size_t>(c) * in + in4), _mm512_set1_pd(go), tail);
+          bias += go;
+        }
+        _mm512_mask_storeu_pd(row + in4, mk, tail);
+#else
         for (int c = 0; c < cols; ++c) {
           const double go = g_cur[static_cast<size_t>(c) * out + o];
           const double* x = X + static_cast<size_t>(c) * in;
           for (int i = in4; i < in; ++i) row[i] = std::fma(x[i], go, row[i]);
-          gb[o] += go;
+          bias += go;
         }
+#endif
+        gb[o] = bias;
       }
     }
     // input: dx = Wᵀ dz

@@ -12,6 +12,7 @@
 // allocate nothing; forward() and backward() on a plain parameter vector pack into a temporary first.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 namespace divcoll::nn {
@@ -45,6 +46,10 @@ void pack(const Layout& L, const double* params, double* packed);
 // (size_l × cols) column-major; the caller fills the input block (l = 0), forward fills the rest.
 void forward_packed(const Layout& L, const double* packed, int cols, double* acts);
 void forward(const Layout& L, const double* params, int cols, double* acts);
+// n networks of the same layout, one column each, with their own weights (packed + g·packed_stride) and their
+// own activation buffers (acts + g·activation_count()); the same bits as n calls of forward_packed, but the
+// networks' dependency chains are interleaved (two agents' layers fill each other's latency)
+void forward_packed_nets(const Layout& L, const double* packed, size_t packed_stride, int n, double* acts);
 
 // backward from the gradient of the loss w.r.t. the outputs (post-tanh), out_grad (out × cols).
 // adds the parameter gradient into param_grad (param_count()) and, when in_grad is not null, writes the

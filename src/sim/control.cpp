@@ -22,7 +22,9 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     double* act = buf.agent_acts + static_cast<size_t>(a) * na;
     const int32_t* mi = &sc.agent_mass_index[a * kAgentMasses];
     // the sines are the same for every agent: computed for the first, copied to the others
-    if (a == 0)
+    if (a == 0 && t < m.sine_steps)
+      std::copy(&m.sines[static_cast<size_t>(t) * k.n_sines], &m.sines[static_cast<size_t>(t + 1) * k.n_sines], act);
+    else if (a == 0)
       for (int j = 0; j < k.n_sines; ++j) act[j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
     else
       std::copy(buf.agent_acts, buf.agent_acts + k.n_sines, act);
@@ -40,11 +42,14 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
       in[4 * q + 2] = v[2 * mi[q]] * ka;
       in[4 * q + 3] = v[2 * mi[q] + 1] * ka;
     }
-    nn::forward_packed(m.agent_layout, &m.agent_packed[static_cast<size_t>(a) * m.agent_packed_count], 1, act);
-    const double* y = act + m.agent_layout.activation_offset(m.agent_layout.n_layers());
+    (void)n_in;
+  }
+  // every agent's network in one call: two agents' layers at a time, each filling the other's latency
+  if (m.A > 0) nn::forward_packed_nets(m.agent_layout, m.agent_packed.data(), m.agent_packed_count, m.A, buf.agent_acts);
+  for (int a = 0; a < m.A; ++a) {
+    const double* y = buf.agent_acts + static_cast<size_t>(a) * na + m.agent_layout.activation_offset(m.agent_layout.n_layers());
     const int32_t* si = &sc.agent_spring_index[a * kAgentSprings];
     for (int r = 0; r < kAgentSprings; ++r) o[si[r]] = k.agent_alpha * y[r] + (1.0 - k.agent_alpha) * o[si[r]];
-    (void)n_in;
   }
 
   // connectors

@@ -137,6 +137,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
                            << " (set it to 0 to choose automatically)");
   Model& m = model;
   m.compile(sc, n_sub);
+  if (m.A > 0) m.prepare_sines(opt.steps);
   size_for(m, opt);
 
   const int T = opt.steps, n = m.substeps, N = m.N, S = m.S;

@@ -33,6 +33,7 @@ void Model::compile(const Scene& s, int n_substeps) {
   has_connectors = C > 0;
 
   inv_mass.resize(N);
+  spring_scratch.resize(4 * static_cast<size_t>(S));
   for (int i = 0; i < N; ++i) inv_mass[i] = 1.0 / s.mass[i];
 
   agent_layout = nn::agent_layout(agent_input_size(s.constants));
@@ -46,6 +47,10 @@ void Model::compile(const Scene& s, int n_substeps) {
              &agent_packed[static_cast<size_t>(a) * agent_packed_count]);
   conn_packed.resize(C > 0 ? nn::packed_count(conn_layout) : 0);
   if (C > 0) nn::pack(conn_layout, s.connector_params.data(), conn_packed.data());
+
+  // the sine table holds for these constants only
+  const Constants& k = s.constants;
+  if (k.omega != sine_omega_ || k.dt != sine_dt_ || k.n_sines != sine_n_) sine_steps = 0;
 
   // distinct anchors of each connector, in order of first appearance (i then j, spring by spring)
   conn_anchor_start.assign(1, 0);
@@ -62,6 +67,20 @@ void Model::compile(const Scene& s, int n_substeps) {
     }
     conn_anchor_start.push_back(static_cast<int32_t>(conn_anchor.size()));
   }
+}
+
+void Model::prepare_sines(int steps) {
+  if (steps <= sine_steps) return;
+  const Constants& k = scene->constants;
+  sine_omega_ = k.omega;
+  sine_dt_ = k.dt;
+  sine_n_ = k.n_sines;
+  sines.resize(static_cast<size_t>(steps) * k.n_sines);
+  // the expression of control_forward's fallback, term for term: the same bits
+  for (int t = sine_steps; t < steps; ++t)
+    for (int j = 0; j < k.n_sines; ++j)
+      sines[static_cast<size_t>(t) * k.n_sines + j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
+  sine_steps = steps;
 }
 
 }  // namespace divcoll::sim

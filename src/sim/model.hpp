@@ -31,6 +31,8 @@ struct Model {
   std::vector<double> seg_x, seg_y, seg_s;
 
   std::vector<double> inv_mass;  // (N)
+  // the springs stages' per-spring values between their two loops (4 × S); scratch, hence mutable
+  mutable std::vector<double> spring_scratch;
 
   // controllers
   nn::Layout agent_layout, conn_layout;
@@ -42,8 +44,17 @@ struct Model {
   // distinct anchor masses per connector: conn_anchor[conn_anchor_start[c] .. conn_anchor_start[c+1])
   std::vector<int32_t> conn_anchor_start, conn_anchor;
 
-  // compiles `s` (validated by the caller); reuses this model's buffers
+  // the agents' sine inputs sin(ω t Δt + 2π j / n_sines) of steps t < sine_steps (sine_steps × n_sines): the
+  // same for every scene with the same constants, so kept across compiles and computed once per batch
+  std::vector<double> sines;
+  int sine_steps = 0;
+
+  // compiles `s` (validated by the caller); reuses this model's buffers (the sine table too, if it still fits)
   void compile(const Scene& s, int substeps);
+  // makes the sine table cover steps [0, steps) for the compiled scene's constants
+  void prepare_sines(int steps);
+  double sine_omega_ = 0, sine_dt_ = 0;  // the constants the table was made for
+  int sine_n_ = 0;
 };
 
 }  // namespace divcoll::sim

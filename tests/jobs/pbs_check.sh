@@ -86,7 +86,7 @@ walltime=(PBS_WALLTIME=121 DIVCOLL_STOP_BEFORE_S=120 DIVCOLL_MAX_RESUBMITS=1)
 pbs_job pbs-1.log PBS_JOBID=1001.fake "${walltime[@]}" CONFIG="$SRC/configs/tiny.toml" OUT="$W/run.h5" \
   DIVCOLL_OVERRIDES="${OVR[*]}" || fail "job 1001 failed"
 grep -q "time-limit warning armed: SIGUSR1 in 1 s" "$W/pbs-1.log" || fail "job 1001 armed no timer"
-grep -q "checkpoint written: stopping the run" "$W/pbs-1.log" || fail "job 1001 did not stop at a checkpoint"
+grep -q "checkpoint written: the run stopped right after it" "$W/pbs-1.log" || fail "job 1001 did not stop at a checkpoint"
 grep -q "resubmitted as job 1002.fake" "$W/pbs-1.log" || fail "job 1001 did not resubmit itself"
 ! h5dump -a /end_time "$W/run.h5" > /dev/null 2>&1 || fail "the warning came too late: job 1001 completed the run"
 for a in -V "depend=afterany:1001.fake" "walltime=0:02:01" divcoll-pbs "$SRC/jobs/pbs/divcoll.pbs"; do

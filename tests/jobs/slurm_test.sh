@@ -199,7 +199,7 @@ for j in "$j1" "$j2"; do
 done
 o1=$W/divcoll-test-$j1.out o2=$W/divcoll-test-$j2.out
 grep -q "stopping the run after its next checkpoint" "$o1" || fail "job $j1 did not act on the warning"
-grep -q "checkpoint written: stopping the run" "$o1" || fail "job $j1 did not stop at a checkpoint"
+grep -q "checkpoint written: the run stopped right after it" "$o1" || fail "job $j1 did not stop at a checkpoint"
 ! grep -q "run complete" "$o1" || fail "the warning came too late: job $j1 completed the run"
 grep -q "resuming" "$o2" || fail "job $j2 did not resume the run"
 grep -q "no continuation can follow" "$o2" || fail "job $j2 did not log its ignored warning"

@@ -1,0 +1,423 @@
+// connector training as a plan (mpi/plan.hpp): every slot (a connector being trained) in lock-step, one round
+// per iteration, one item per pair episode. Two plans: the plain one (Adam or a normalized step on the
+// summed gradient) and, when any of issue 9.2's optimisation keys differs from its default, the extended
+// one (collective::ConnectorOptimizer: decaying rate, keep-best on a validation batch, truncated
+// backpropagation, gradient averaging, CMA-ES). They share the slots, batches, curves and weights rows.
+//
+// Rows (through the run-file schema; <group> = each slot's group, columns its slots):
+//   <group>/curve_u, curve_bl, nan_pairs  (I × columns)   each iteration's batch (before its step)
+//   <group>/params                        (columns × P_c) the trained weights (finish)
+//   state/params, adam_m, adam_v          (N × P_c)       the committed optimizer state
+// extended, with keep_best: <group>/val_bl ((I+1) × columns), <group>/best_iteration (columns), and in the
+// state best_params (N × P_c), best (N × 2), es_fitness (N × I·popsize, cmaes)
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+
+#include "collective/pairs.hpp"
+#include "evo/connector_opt.hpp"
+#include "evo/optim.hpp"
+#include "io/run_read.hpp"
+#include "morph/body.hpp"
+#include "mpi/connectors_stage.hpp"
+#include "mpi/driver.hpp"
+#include "mpi/protocol.hpp"
+
+namespace divcoll::mpi {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// one pair episode of one weight vector (the plain plan: weight vector = slot)
+struct PairTask {
+  int32_t weights = 0, slot = 0, a = 0, b = 0;
+  uint8_t grad = 1;
+};
+struct PairDone {
+  double travel_u = 0, travel_bl = 0;
+  uint8_t status = 0;
+  std::vector<double> grad;
+};
+template <class Ar>
+void serialize(Ar& ar, PairTask& t, unsigned) {
+  ar & t.weights & t.slot & t.a & t.b & t.grad;
+}
+template <class Ar>
+void serialize(Ar& ar, PairDone& d, unsigned) {
+  ar & d.travel_u & d.travel_bl & d.status & d.grad;
+}
+
+Records& operator+=(Records& a, Records b) {
+  for (Record& r : b) a.push_back(std::move(r));
+  return a;
+}
+
+// what both plans share
+class ConnectorsPlan : public Plan {
+ public:
+  ConnectorsPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                 const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
+      : cfg_(cfg), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
+        N_(static_cast<int>(slots.size())), B_(spec.batch_pairs), I_(spec.iterations),
+        pop_(static_cast<int>(agents.size())), Pc_(sim::connector_param_count()), sg_(spec.state_group + "/state/") {}
+
+  Info info() const override { return {spec_.label, spec_.state_group, "iterations_done", "iteration", "pair-episodes"}; }
+  int rounds() const override { return I_; }
+  void take_input(int, const std::string& input) override { weights_ = unpack<std::vector<double>>(input); }
+  // master: the trained weights, once finished
+  virtual std::vector<std::vector<double>> weights() const = 0;
+
+ protected:
+  // slot c's batch of iteration it: uniform slots pair agent i with its clone, diverse ones draw fresh pairs
+  std::vector<std::pair<int, int>> batch(int c, int it) const {
+    if (!slots_[c].diverse) return collective::uniform_pairs(B_);
+    Rng rng = make_rng(cfg_.run.seed, slots_[c].stream, it);
+    return collective::random_pairs(rng, pop_, B_);
+  }
+  std::vector<double> initial_weights(int c) const {
+    Rng rng = make_rng(cfg_.run.seed, slots_[c].stream, 1000000);
+    return morph::init_connector_params(rng, cfg_.connectors.init_out_gain);
+  }
+  // one pair episode of weight vector t.weights of the round's weights_
+  PairDone episode(const PairTask& t, const sim::RunOptions& ro) {
+    const ConnectorSlot& s = slots_[t.slot];
+    const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
+                                weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
+    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.stiffness, s.env, ro, nullptr);
+    return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad};
+  }
+  // row `row` of each group's (rows × columns) dataset <group>/<name>, from per-slot values
+  Records slot_row(const std::string& name, int rows, int row, const std::vector<double>& per_slot) const {
+    Records out;
+    for (size_t gi = 0; gi < groups_.groups.size(); ++gi) {
+      std::vector<double> u(groups_.columns[gi], kNaN);
+      for (int c = 0; c < N_; ++c)
+        if (slots_[c].group == groups_.groups[gi]) u[slots_[c].column] = per_slot[c];
+      out.push_back({groups_.groups[gi] + "/" + name, {static_cast<uint64_t>(rows), static_cast<uint64_t>(groups_.columns[gi])},
+                     {row}, std::move(u)});
+    }
+    return out;
+  }
+  // <group>/<name> (columns × width) from per-slot rows
+  Records slot_rows(const std::string& name, const std::vector<std::vector<double>>& per_slot, size_t width) const {
+    Records out;
+    for (size_t gi = 0; gi < groups_.groups.size(); ++gi) {
+      Record r{groups_.groups[gi] + "/" + name, {static_cast<uint64_t>(groups_.columns[gi])}, {}, std::vector<double>{}};
+      if (width > 0) r.dims.push_back(width);
+      auto& v = std::get<std::vector<double>>(r.values);
+      for (int c = 0; c < N_; ++c)
+        if (slots_[c].group == groups_.groups[gi])
+          r.rows.push_back(slots_[c].column), v.insert(v.end(), per_slot[c].begin(), per_slot[c].end());
+      out.push_back(std::move(r));
+    }
+    return out;
+  }
+  // state/<name> (N × width): one row per slot
+  Record state_rows(const std::string& name, const std::vector<std::vector<double>>& per_slot, size_t width) const {
+    Record r{sg_ + name, {static_cast<uint64_t>(N_), width}, {}, io::join_weights(per_slot)};
+    for (int c = 0; c < N_; ++c) r.rows.push_back(c);
+    return r;
+  }
+  Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
+    Records out = slot_row("curve_u", I_, it, cu);
+    out += slot_row("curve_bl", I_, it, cb);
+    out += slot_row("nan_pairs", I_, it, nn);
+    return out;
+  }
+
+  const io::RunConfig& cfg_;
+  const std::vector<collective::Agent>& agents_;
+  const std::vector<ConnectorSlot>& slots_;
+  const TrainSpec spec_;
+  const SlotGroups groups_;
+  const int N_, B_, I_, pop_, Pc_;
+  const std::string sg_;
+  sim::Simulator sim_;
+  std::vector<double> weights_;  // the round's weight vectors, Pc each (every rank)
+};
+
+// the plain method: each slot's gradients summed in pair order, then one Adam (or normalized) step
+class PlainConnectorsPlan final : public ConnectorsPlan {
+ public:
+  using ConnectorsPlan::ConnectorsPlan;
+  std::vector<std::string> state_paths() const override { return {sg_ + "params", sg_ + "adam_m", sg_ + "adam_v"}; }
+  void start(int done, const StoredState& s) override {
+    params_.resize(N_);
+    adam_.resize(N_);
+    if (done > 0) {
+      params_ = io::split_weights(s.at(sg_ + "params"), N_);
+      const auto m = io::split_weights(s.at(sg_ + "adam_m"), N_), v = io::split_weights(s.at(sg_ + "adam_v"), N_);
+      for (int c = 0; c < N_; ++c) adam_[c].m = m[c], adam_[c].v = v[c];
+      return;
+    }
+    for (int c = 0; c < N_; ++c) {
+      params_[c] = initial_weights(c);
+      adam_[c].m.assign(Pc_, 0.0);
+      adam_[c].v.assign(Pc_, 0.0);
+    }
+  }
+  Records state() const override {
+    std::vector<std::vector<double>> m, v;
+    for (const evo::Adam& a : adam_) m.push_back(a.m), v.push_back(a.v);
+    return {state_rows("params", params_, Pc_), state_rows("adam_m", m, Pc_), state_rows("adam_v", v, Pc_)};
+  }
+  std::string round_input(int) override { return pack(io::join_weights(params_)); }
+  std::vector<std::string> items(int it) override {
+    std::vector<std::string> items;
+    for (int c = 0; c < N_; ++c)
+      for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
+    cu_.assign(N_, kNaN), cb_.assign(N_, kNaN), nn_.assign(N_, 0);
+    su_.assign(N_, 0.0), sb_.assign(N_, 0.0), ok_.assign(N_, 0);
+    g_.assign(N_, std::vector<double>(Pc_, 0.0));
+    return items;
+  }
+  std::string compute(const std::string& item) override {
+    sim::RunOptions ro;
+    ro.steps = spec_.episode_steps;
+    ro.grad = true;
+    ro.agent_param_grad = false;  // the agents stay frozen
+    return pack(episode(unpack<PairTask>(item), ro));
+  }
+  void reduce(int, int64_t i, const std::string& bytes) override {
+    const int c = static_cast<int>(i / B_);
+    const PairDone d = unpack<PairDone>(bytes);
+    if (d.status != 0 || !std::isfinite(d.travel_u)) {
+      ++nn_[c];
+      return;
+    }
+    ++ok_[c];
+    su_[c] += d.travel_u;
+    sb_[c] += d.travel_bl;
+    for (int q = 0; q < Pc_; ++q) g_[c][q] += d.grad[q];
+  }
+  Records end_round(int it) override {
+    const auto& C = cfg_.connectors;
+    for (int c = 0; c < N_; ++c) {
+      if (ok_[c] == 0) continue;
+      cu_[c] = su_[c] / ok_[c];
+      cb_[c] = sb_[c] / ok_[c];
+      for (double& x : g_[c]) x = -x / ok_[c];  // loss = −mean travel
+      if (C.optimizer == "adam")
+        adam_[c].step(params_[c], g_[c], C.lr, C.clip_norm, it + 1);
+      else
+        evo::normalized_step(params_[c], g_[c], C.lr);
+    }
+    return curves(it, cu_, cb_, nn_);
+  }
+  std::string summary(int) const override {
+    std::string s;
+    const auto& groups = groups_.groups;
+    for (size_t gi = 0; gi < groups.size() && gi < 6; ++gi) {
+      double m = 0;
+      int k = 0;
+      for (int c = 0; c < N_; ++c)
+        if (slots_[c].group == groups[gi] && std::isfinite(cb_[c])) m += cb_[c], ++k;
+      char b[128];
+      std::snprintf(b, sizeof b, "%s%s %.3f", s.empty() ? "" : " ", groups[gi].substr(groups[gi].rfind('/') + 1).c_str(),
+                    k ? m / k : NAN);
+      s += b;
+    }
+    return s + (groups.size() > 6 ? " ... BL" : " BL");
+  }
+  Records finish() override { return slot_rows("params", params_, Pc_); }
+  std::vector<std::vector<double>> weights() const override { return params_; }
+
+ private:
+  std::vector<std::vector<double>> params_, g_;
+  std::vector<evo::Adam> adam_;
+  std::vector<double> cu_, cb_, nn_, su_, sb_;
+  std::vector<int> ok_;
+};
+
+// the optimisation keys of issue 9.2: ask/tell optimizers, each probe a weight vector on a batch; with
+// keep_best each slot's current weights also run its fixed validation batch, and a closing round scores
+// the final weights
+class ExtendedConnectorsPlan final : public ConnectorsPlan {
+ public:
+  ExtendedConnectorsPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                         const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
+      : ConnectorsPlan(cfg, agents, slots, spec), os_(collective::opt_settings(cfg.connectors)),
+        es_(os_.optimizer == "cmaes"), E_(static_cast<size_t>(spec.iterations) * os_.es_popsize) {}
+
+  bool closing_round() const override { return os_.keep_best; }
+  std::vector<std::string> state_paths() const override {
+    std::vector<std::string> p;
+    for (const char* n : {"params", "adam_m", "adam_v", "best_params", "best"}) p.push_back(sg_ + n);
+    if (es_) p.push_back(sg_ + "es_fitness");
+    return p;
+  }
+  void start(int done, const StoredState& s) override {
+    for (int c = 0; c < N_; ++c) opt_.emplace_back(os_, initial_weights(c), I_, cfg_.run.seed, slots_[c].stream);
+    if (os_.keep_best)
+      for (int c = 0; c < N_; ++c)
+        val_.push_back(collective::validation_pairs(slots_[c].diverse, cfg_.connectors.validation_pairs, B_, pop_,
+                                                    cfg_.run.seed, slots_[c].stream));
+    if (done == 0) return;
+    auto row = [&](const std::string& name, int c, size_t w) {
+      const std::vector<double>& x = s.at(sg_ + name);
+      return std::vector<double>(x.begin() + c * w, x.begin() + (c + 1) * w);
+    };
+    for (int c = 0; c < N_; ++c) {
+      collective::ConnectorOptimizer::State st;
+      st.params = row("params", c, Pc_), st.m = row("adam_m", c, Pc_), st.v = row("adam_v", c, Pc_);
+      st.best_params = row("best_params", c, Pc_);
+      const std::vector<double> b = row("best", c, 2);
+      st.best_score = b[0], st.best_it = static_cast<int>(b[1]);
+      if (es_) st.es_fitness = row("es_fitness", c, E_);
+      opt_[c].restore(st, done);
+    }
+  }
+  Records state() const override {
+    std::vector<std::vector<double>> p, m, v, bp, b, ef;
+    for (int c = 0; c < N_; ++c) {
+      const auto st = opt_[c].state();
+      p.push_back(st.params), m.push_back(st.m), v.push_back(st.v), bp.push_back(st.best_params);
+      b.push_back({st.best_score, static_cast<double>(st.best_it)});
+      ef.push_back(st.es_fitness);
+      ef.back().resize(E_, kNaN);
+    }
+    Records r = {state_rows("params", p, Pc_), state_rows("adam_m", m, Pc_), state_rows("adam_v", v, Pc_),
+                 state_rows("best_params", bp, Pc_), state_rows("best", b, 2)};
+    if (es_) r.push_back(state_rows("es_fitness", ef, E_));
+    return r;
+  }
+  // the round's weight vectors and items: each slot's probes on its batch, then (keep_best) its current
+  // weights on its validation batch; the closing round (it = I) has the validation alone
+  std::string round_input(int it) override {
+    const bool closing = it >= I_;
+    std::vector<double> w;
+    items_.clear();
+    counts_.assign(N_, {});
+    int nw = 0;
+    for (int c = 0; c < N_; ++c) {
+      if (!closing) {
+        const auto pairs = batch(c, it);
+        for (const collective::Probe& p : opt_[c].ask(it)) {
+          w.insert(w.end(), p.weights.begin(), p.weights.end());
+          for (const auto& [a, b] : pairs) items_.push_back(pack(PairTask{nw, c, a, b, p.grad}));
+          counts_[c].push_back(static_cast<int>(pairs.size()));
+          ++nw;
+        }
+      }
+      if (os_.keep_best) {
+        w.insert(w.end(), opt_[c].current().begin(), opt_[c].current().end());
+        for (const auto& [a, b] : val_[c]) items_.push_back(pack(PairTask{nw, c, a, b, 0}));
+        counts_[c].push_back(static_cast<int>(val_[c].size()));
+        ++nw;
+      }
+    }
+    done_.assign(items_.size(), {});
+    return pack(w);
+  }
+  std::vector<std::string> items(int) override { return items_; }
+  std::string compute(const std::string& item) override {
+    const PairTask t = unpack<PairTask>(item);
+    sim::RunOptions ro;
+    ro.steps = spec_.episode_steps;
+    ro.grad = t.grad != 0;
+    ro.agent_param_grad = false;  // the agents stay frozen
+    ro.grad_window = os_.bptt_window;
+    return pack(episode(t, ro));
+  }
+  void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<PairDone>(bytes); }
+  Records end_round(int it) override {
+    // per slot: the probes' mean results and the validation score
+    std::vector<std::vector<collective::ProbeResult>> results(N_);
+    vscore_.assign(N_, kNaN);
+    size_t q = 0;
+    for (int c = 0; c < N_; ++c)
+      for (size_t w = 0; w < counts_[c].size(); ++w) {
+        collective::ProbeSum sum;
+        for (int p = 0; p < counts_[c][w]; ++p, ++q) {
+          collective::PairOutcome o;
+          o.travel_u = done_[q].travel_u, o.travel_bl = done_[q].travel_bl;
+          o.status = static_cast<sim::Status>(done_[q].status), o.grad = done_[q].grad;
+          sum.add(o);
+        }
+        if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;
+        else results[c].push_back(sum.mean());
+      }
+    Records out;
+    if (it < I_) {
+      cu_.assign(N_, kNaN), cb_.assign(N_, kNaN);
+      std::vector<double> nn(N_, 0);
+      for (int c = 0; c < N_; ++c) {
+        opt_[c].tell(it, results[c], vscore_[c]);
+        cu_[c] = opt_[c].curve_u, cb_[c] = opt_[c].curve_bl, nn[c] = opt_[c].curve_not_ok;
+      }
+      out = curves(it, cu_, cb_, nn);
+    } else {  // the final weights' validation, and the kept weights' rows
+      for (int c = 0; c < N_; ++c) opt_[c].finish(vscore_[c]);
+    }
+    if (os_.keep_best) out += slot_row("val_bl", I_ + 1, it, vscore_);
+    if (it >= I_) {
+      std::vector<std::vector<double>> bi;
+      for (int c = 0; c < N_; ++c) bi.push_back({static_cast<double>(opt_[c].best_iteration())});
+      out += slot_rows("best_iteration", bi, 0);
+    }
+    return out;
+  }
+  std::string summary(int) const override {
+    double m = 0, v = 0;
+    int k = 0, kv = 0;
+    for (int c = 0; c < N_; ++c) {
+      if (std::isfinite(cb_[c])) m += cb_[c], ++k;
+      if (std::isfinite(vscore_[c])) v += vscore_[c], ++kv;
+    }
+    char b[160];
+    std::snprintf(b, sizeof b, "batch %.3f BL", k ? m / k : NAN);
+    std::string s = b;
+    if (kv) std::snprintf(b, sizeof b, ", validation %.3f BL", v / kv), s += b;
+    std::snprintf(b, sizeof b, " (mean over %d connectors)", N_);
+    return s + b;
+  }
+  Records finish() override { return slot_rows("params", weights(), Pc_); }
+  std::vector<std::vector<double>> weights() const override {
+    std::vector<std::vector<double>> w;
+    for (const auto& o : opt_) w.push_back(o.result());
+    return w;
+  }
+
+ private:
+  const collective::OptSettings os_;
+  const bool es_;
+  const size_t E_;
+  std::vector<collective::ConnectorOptimizer> opt_;
+  std::vector<std::vector<std::pair<int, int>>> val_;
+  std::vector<std::string> items_;
+  std::vector<std::vector<int>> counts_;
+  std::vector<PairDone> done_;
+  std::vector<double> cu_, cb_, vscore_;
+};
+
+}  // namespace
+
+SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots) {
+  SlotGroups g;
+  for (const ConnectorSlot& s : slots) {
+    const auto at = std::find(g.groups.begin(), g.groups.end(), s.group);
+    if (at == g.groups.end()) g.groups.push_back(s.group), g.columns.push_back(s.column + 1);
+    else g.columns[at - g.groups.begin()] = std::max(g.columns[at - g.groups.begin()], s.column + 1);
+  }
+  return g;
+}
+
+std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                                                  const std::vector<collective::Agent>& agents,
+                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
+                                                  const std::function<void()>& checkpoint) {
+  std::unique_ptr<ConnectorsPlan> plan;
+  if (collective::extended(collective::opt_settings(cfg.connectors)))
+    plan = std::make_unique<ExtendedConnectorsPlan>(cfg, agents, slots, spec);
+  else
+    plan = std::make_unique<PlainConnectorsPlan>(cfg, agents, slots, spec);
+  drive(comm, cfg, file, *plan, checkpoint);
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  // every rank gets the trained weights
+  return broadcast(comm, rank == 0 ? plan->weights() : std::vector<std::vector<double>>{});
+}
+
+}  // namespace divcoll::mpi

@@ -1,0 +1,34 @@
+// the one driver: runs any stage's plan (mpi/plan.hpp) over the ranks.
+//
+// It owns what every stage shares: the round counter and resume, the task farm (mpi/scheduler.hpp) and the
+// gathering of results in item order, writing the plan's rows (every rank takes part in each write: parallel
+// HDF5), the commit of a round's state with its counter, progress lines with an ETA, and the stage's timing.
+//
+// Commit: the plan's state and the counter are written together and then checkpointed (mpi/checkpoint.hpp),
+// one step; --resume starts from the last checkpoint, never from what a killed job left in the run file
+// after it, so a kill between the state and the counter (or anywhere else) resumes a consistent pair.
+// The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> makes every rank flush the run
+// file and exit (code 86) right between writing that commit's state and its counter (tests/mpi/commit_kill_test.sh).
+#pragma once
+
+#include <mpi.h>
+
+#include <functional>
+#include <string>
+
+#include "io/config.hpp"
+#include "io/h5.hpp"
+#include "mpi/plan.hpp"
+
+namespace divcoll::mpi {
+
+// runs (or resumes) `plan` on `comm` until its rounds are done; every rank calls it with its own plan
+// object (built from the same inputs). `checkpoint` is called (collectively) at each commit: after every
+// output.checkpoint_every rounds and after the last one.
+void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+           const std::function<void()>& checkpoint);
+
+// writes the master's records; every rank calls it (the others' `records` are ignored)
+void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);
+
+}  // namespace divcoll::mpi

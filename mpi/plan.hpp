@@ -1,0 +1,88 @@
+// a stage as a plan: what it computes, round by round, and nothing about how (ranks, files, printing).
+//
+// A plan has rounds (a stage's generations or iterations), each a list of items (serialized tasks). The
+// driver (mpi/driver.hpp) spreads a round's items over the ranks, hands the plan every result in item order
+// (so a round's reduction does not depend on the rank count), then asks it what the round records. Between
+// rounds it commits the plan's state and the round counter together, as one checkpoint step, and resumes
+// from the last commit. The plan's methods run on the master unless noted; compute() runs on every rank.
+//
+// To add a stage: write its plan (this interface) and its rows in the run-file schema (src/io/run_file.cpp).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace divcoll::mpi {
+
+// rows of one run-file dataset: `rows` of a dataset of dims `dims` (created on first use), row-major values
+struct Record {
+  std::string path;
+  std::vector<uint64_t> dims;
+  std::vector<int64_t> rows;
+  std::variant<std::vector<double>, std::vector<int64_t>, std::vector<int32_t>, std::vector<uint8_t>, std::vector<float>> values;
+};
+using Records = std::vector<Record>;
+
+// an attribute of the plan's group: text or an integer
+struct Attribute {
+  std::string name;
+  std::variant<std::string, int64_t> value;
+};
+
+// the committed state read back at resume: dataset path -> its values (row-major)
+using StoredState = std::map<std::string, std::vector<double>>;
+
+class Plan {
+ public:
+  virtual ~Plan() = default;
+
+  // ---- what it is ----
+  struct Info {
+    std::string label;                        // progress lines ("connectors", "graded same_shape", ...)
+    std::string group;                        // the run-file group holding its round counter
+    std::string counter = "iterations_done";  // that counter's attribute
+    std::string round_word = "iteration";     // progress lines
+    std::string item_word = "items";          // progress lines (per second)
+    int commit_every = 0;                     // rounds per commit; 0: output.checkpoint_every
+    // a stage of its own (else a part of one, e.g. connector training inside the specialists stage): the
+    // driver then sets the group's status ("running", then "complete" with a last checkpoint), writes
+    // attributes() (every rank: the same values) and setup() (master: rows drawn once) when it starts
+    bool owns_stage = false;
+  };
+  virtual Info info() const = 0;
+  virtual int rounds() const = 0;                       // counted rounds: 0 .. rounds()-1
+  virtual bool closing_round() const { return false; }  // one more, uncounted round (index rounds()), redone on resume
+  virtual std::vector<Attribute> attributes() const { return {}; }
+  virtual Records setup() { return {}; }
+
+  // ---- state ----
+  // the datasets of its state (restore() gets them back after a resume)
+  virtual std::vector<std::string> state_paths() const { return {}; }
+  // master: from nothing (done == 0) or from the state committed with `done` rounds
+  virtual void start(int done, const StoredState& stored) = 0;
+  // master: its state now, to commit with the counter
+  virtual Records state() const { return {}; }
+
+  // ---- a round ----
+  // master: data every rank needs for compute() in this round (e.g. the weights); handed to take_input()
+  virtual std::string round_input(int round) { (void)round; return {}; }
+  // every rank
+  virtual void take_input(int round, const std::string& input) { (void)round, (void)input; }
+  // master: the round's items
+  virtual std::vector<std::string> items(int round) = 0;
+  // every rank, in a thread of the farm: one item's pure compute (task bytes -> result bytes)
+  virtual std::string compute(const std::string& item) = 0;
+  // master: every result of the round, in item order
+  virtual void reduce(int round, int64_t item, const std::string& result) = 0;
+  // master: after the round's last result: its step, and the rows it records
+  virtual Records end_round(int round) = 0;
+  // master: one line's summary of the round just ended (after "label: iteration k/N: ")
+  virtual std::string summary(int round) const { (void)round; return {}; }
+  // master: the rows recorded once the rounds are done (written again when a finished stage is resumed)
+  virtual Records finish() { return {}; }
+};
+
+}  // namespace divcoll::mpi
