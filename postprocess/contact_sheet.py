@@ -88,7 +88,7 @@ def main(argv=None):
             ax = axes[e, c]
             last = ep.x.shape[0] - 1
             animate.draw_frame(ax, ep, last, half_width=0.9,
-                               title=f"{env}: {label}" + ("" if same else "  (differs from the run file!)"))
+                               title=f"{env.replace('_', ' ')}: {label}" + ("" if same else "  (differs from the run file!)"))
             com = ep.x.mean(1)
             ax.plot(com[:, 0], com[:, 1], color="0.4", lw=0.6, zorder=1)
             ax.set_xlabel("")

@@ -123,7 +123,9 @@ def draw_cues(ax, clip, t, x0, x1, y0, y1):
             ax.add_patch(FancyArrow(cx, cy, length, 0, width=0.012 * (y1 - y0), head_width=0.04 * (y1 - y0),
                                     head_length=min(abs(length), 0.03 * (x1 - x0)), length_includes_head=True,
                                     color="#1f6fb4", zorder=6))
-        ax.text(cx, cy - 0.05 * (y1 - y0), f"wind {w:+.1f} u/s²", ha="center", va="top", fontsize=9,
+        shown = round(w, 1) or 0.0  # no "-0.0" where the wind turns
+        ax.text(cx, cy - 0.05 * (y1 - y0), f"wind {shown:+.1f} u/s²" if shown else "wind 0 u/s² (turning)",
+                ha="center", va="top", fontsize=9,
                 color="#1f6fb4", zorder=6)
 
 

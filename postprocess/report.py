@@ -7,7 +7,8 @@ summary tables, every figure the postprocess scripts can draw, and movies.
     /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll] [--movie]
 
 Writes DIR/report.md, DIR/report.html (report_html.py: figures embedded, movies as <video controls> beside
-it, every number of Fig. 2A linked to the `divcoll export` command of its episode), DIR/table_s1.md,
+it; every number of the claims table and of Fig. 2A per environment, and every single episode a caption
+names, linked to the `divcoll export` command of its episode: report_episodes.py), DIR/table_s1.md,
 DIR/figures/* (motion_<env>.mp4: a uniform and a diverse pair side by side) and with --movie DIR/movie/*
 (movie.py: the paper's Supplementary Movie). A figure script that fails (for example because its
 stage is missing from the run file) is listed with its message instead of its figure; the page is still written.
@@ -23,6 +24,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
 import claims  # noqa: E402
+import report_episodes  # noqa: E402
 import report_html  # noqa: E402
 import summary  # noqa: E402
 from divcoll_post import analysis as A  # noqa: E402
@@ -84,7 +86,7 @@ def draw_figures(run, fig_dir, divcoll, skip=None):
     return notes
 
 
-def motion_section(fig_dir, out_dir, quick=False):
+def motion_section(fig_dir, out_dir, quick=False, eps=None):
     """a movie of the uniform and the diverse weak pair side by side in one novel environment (MP4, movie.py),
     from the episode files contact_sheet.py exported, and where every exported episode is"""
     head = ["## Motion", ""]
@@ -100,7 +102,7 @@ def motion_section(fig_dir, out_dir, quick=False):
     pick = "wind" if "wind" in envs else next((e for e in envs if e != "flat"), envs[0])
     lines = head + [f"Pair 0 of replicate 0 in **{pick}**, the uniform pair (weak uniform-trained connector) beside "
                     "the diverse pair (weak diverse-trained connector); springs coloured by strain, travel in BL, "
-                    "the camera follows each centre of mass:", ""]
+                    "the camera follows each centre of mass" + episode_refs(eps, pick, 0) + ":", ""]
     import movie  # noqa: E402 (matplotlib and ffmpeg; only needed here)
     mine = [sc for sc in scenes if os.path.basename(sc).startswith(pick + "_weak_")]
     mp4 = os.path.join(fig_dir, f"motion_{pick}.mp4")
@@ -116,7 +118,8 @@ def motion_section(fig_dir, out_dir, quick=False):
         lines.append(f"[{os.path.basename(mp4)}]({os.path.relpath(mp4, out_dir)})")
     except Exception as e:  # a broken episode file or no ffmpeg is reported, the page is still written
         lines.append(f"Not rendered: {e}")
-    lines += ["", f"The contact sheet (last step of every environment) is `figures/contact_sheet.png`; the scene and "
+    lines += ["", f"The contact sheet (last step of every environment; pair 0 of replicate 0, e.g. in flat"
+              f"{episode_refs(eps, 'flat', 0)}) is `figures/contact_sheet.png`; the scene and "
               f"trajectory files of all its episodes are in `{os.path.relpath(ep_dir, out_dir)}/`. Any other "
               "episode: `divcoll export RUN.h5 --what pair --env ENV --type TYPE --pair Q --out S.h5`, "
               "`divcoll simulate --scene S.h5 --steps T --out T.h5`, "
@@ -124,7 +127,15 @@ def motion_section(fig_dir, out_dir, quick=False):
     return lines
 
 
-def movie_section(run, out_dir, divcoll):
+def episode_refs(eps, env, pair, types=("weak_uniform@uniform", "weak_diverse@diverse")):
+    """' (episodes: [uniform](#..), [diverse](#..))': pair `pair` of replicate 0 in env of each type, or ''"""
+    if eps is None:
+        return ""
+    got = [f"[{t}](#{a})" for t in types if (a := eps.pair(env, t, pair=pair))]
+    return f" (episodes: {', '.join(got)})" if got else ""
+
+
+def movie_section(run, out_dir, divcoll, eps=None):
     """the paper's Supplementary Movie (movie.py) in out_dir/movie"""
     head = ["## Supplementary Movie", ""]
     import movie  # noqa: E402
@@ -133,7 +144,11 @@ def movie_section(run, out_dir, divcoll):
     except Exception as e:
         return head + [f"Not rendered: {e}", ""]
     names = ["the whole movie", "agent optimisation", "connector optimisation", "deployment, uniform vs diverse"]
-    return head + [f"- {n}: [{os.path.basename(p)}]({os.path.relpath(p, out_dir)})" for n, p in zip(names, paths)] + [""]
+    refs = ["", " (the fittest agent alone on flat, `--what alone --env flat --agent I`)",
+            ", the trained pair is pair 0 of replicate 0 on flat" + episode_refs(eps, "flat", 0, ["weak_diverse@diverse"]),
+            ", pair 0 of replicate 0 in each environment, e.g. wind" + episode_refs(eps, "wind", 0)]
+    return head + [f"- {n}{r}: [{os.path.basename(p)}]({os.path.relpath(p, out_dir)})"
+                   for n, r, p in zip(names, refs, paths)] + [""]
 
 
 def scale_section(run):
@@ -141,9 +156,12 @@ def scale_section(run):
     name, rows = claims.scale(run)
     small = [r for r in rows if isinstance(r[2], (int, float)) and isinstance(r[3], (int, float)) and r[2] < r[3]]
     if small:
-        verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** Claims are judged "
+        verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** This page reports "
+                   f"the run file `{os.path.basename(run)}` only; it is not the paper-scale report. Claims are judged "
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
-                   "the count that is short. The paper-scale results are in the README.")
+                   "the count that is short. The paper-scale report is pending: it needs one run file of "
+                   "`configs/paper.toml` with every stage (hours on 2 cores); the README gives the paper-scale "
+                   "numbers measured so far, from separate runs described there.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
     out = [verdict, "", "| count | config key | this run | paper |", "|---|---|---|---|"]
@@ -157,20 +175,24 @@ def write_report(run, out_dir, divcoll, movie=False, quick=False):
     skip = analysis_skip(run)
     notes = draw_figures(run, fig_dir, divcoll, skip)
     lines = [summary.summarize(run).replace("# divcoll run summary", "# divcoll report", 1), ""]
+    eps = report_episodes.Episodes(run, os.path.abspath(run))
     table = ["## The paper's claims beside this run", "",
-             "| claim | this run | verdict | counts the test needs |", "|---|---|---|---|"]
+             "| claim | this run | verdict | counts the test needs | episodes |", "|---|---|---|---|---|"]
     verdicts = {"held": 0, "did not hold": 0, "too small to judge": 0, "not measured": 0}
-    for text, number, v, needs in claims.claims(run):
+    for (text, fn), (_, number, v, needs) in zip(claims.CLAIMS, claims.claims(run)):
         verdicts[v] += 1
-        table.append(f"| {text} | {number} | **{v}** | {needs} |")
-    table += ["", ", ".join(f"{n} {v}" for v, n in verdicts.items()) + ".", ""]
+        table.append(f"| {text} | {number} | **{v}** | {needs} | {eps.claim_cell(fn.__name__, number)} |")
+    table += ["", ", ".join(f"{n} {v}" for v, n in verdicts.items()) + ". Episodes: each link leads to the "
+              "`divcoll export` command of the median ok episode of one cell the number averages over (an environment "
+              "and an agent alone, a collective type, a specialist or a chain; replicate 0 for connectors), listed "
+              "under [Episodes behind the numbers](#episodes-behind-the-numbers).", ""]
     # the preset and the claims go first, after the provenance paragraph
     head, _, rest = lines[0].partition("\n\n| stage")
-    page = [head, "", *scale_section(run), *table, "## Stages and numbers", "", "| stage" + rest]
+    page = [head, "", *scale_section(run), *table, *eps.fig2a_table(), "## Stages and numbers", "", "| stage" + rest]
     page += table_s1_section(run, out_dir, skip)
-    page += motion_section(fig_dir, out_dir, quick)
+    page += motion_section(fig_dir, out_dir, quick, eps)
     if movie:
-        page += movie_section(run, out_dir, divcoll)
+        page += movie_section(run, out_dir, divcoll, eps)
     page += ["## Figures", ""]
     pngs = sorted(glob.glob(os.path.join(fig_dir, "*.png")))
     for png in pngs:
@@ -178,6 +200,7 @@ def write_report(run, out_dir, divcoll, movie=False, quick=False):
         page.append(f"### {os.path.splitext(os.path.basename(png))[0]}\n\n![{rel}]({rel})\n")
     if notes:
         page += ["Figures not drawn:", "", *notes, ""]
+    page += eps.listing()
     path = os.path.join(out_dir, "report.md")
     with open(path, "w") as fh:
         fh.write("\n".join(page) + "\n")

@@ -1,18 +1,15 @@
 """report.html: the report page (report.py's Markdown) as one self-contained HTML file.
 
 Figures are embedded (PNG as data: URIs), movies are <video controls> pointing at the MP4 files beside the
-page (relative paths: the folder can be moved or served as it is), and a table of Fig. 2A's numbers per
-environment and collective type links every number to the `divcoll export` command of its episode (the
-median ok episode of that cell, replicate 0) and of the agent alone behind the "agents" column. No script,
-no external resource: the page renders offline. Used by report.py (`write(run, out_dir, markdown)`).
+page (relative paths: the folder can be moved or served as it is); the links from numbers to the `divcoll
+export` commands of their episodes (report_episodes.py) are anchors within the page, the episode list's items
+carrying the ids, and a table cell with many of them is folded into <details>. No script, no external
+resource: the page renders offline. Used by report.py (`write(run, out_dir, markdown)`).
 """
 import base64
 import html
 import os
 import re
-
-import h5py
-import numpy as np
 
 CSS = """
 body { font-family: system-ui, -apple-system, 'Segoe UI', sans-serif; max-width: 1180px; margin: 1em auto;
@@ -29,10 +26,6 @@ td.num a { text-decoration: none; }
 .wide { overflow-x: auto; }
 li:target, code:target { background: #fff3b0; }
 """
-
-
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def inline(text, out_dir):
@@ -73,6 +66,22 @@ def verdict_class(cell):
     return f' class="v-{m.group(1).replace(" ", "-")}"' if m else ""
 
 
+def list_item(text, out_dir):
+    """a list item; one that starts with an anchor (report_episodes.py's episode list) gets it as its id"""
+    m = re.match(r'<a id="([\w@.-]+)"></a>(.*)$', text)
+    if m:
+        return f'<li id="{m.group(1)}">{inline(m.group(2), out_dir)}</li>'
+    return f"<li>{inline(text, out_dir)}</li>"
+
+
+def fold(cell, most=14):
+    """a table cell with more than `most` episode links, folded behind a summary that counts them"""
+    n = cell.count('href="#ep-')
+    if n <= most:
+        return cell
+    return f"<details><summary>{n} episodes</summary>{cell}</details>"
+
+
 def markdown_to_html(md, out_dir):
     """the subset of Markdown report.py writes: headings, paragraphs, lists, pipe tables, inline syntax"""
     out, para, lst, rows = [], [], [], []
@@ -83,14 +92,14 @@ def markdown_to_html(md, out_dir):
             out.append("<p>" + inline(" ".join(para), out_dir) + "</p>")
             para.clear()
         if lst:
-            out.append("<ul>" + "".join(f"<li>{inline(x, out_dir)}</li>" for x in lst) + "</ul>")
+            out.append("<ul>" + "".join(list_item(x, out_dir) for x in lst) + "</ul>")
             lst.clear()
         if rows:
             cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows]
             body = [c for c in cells[1:] if not all(re.fullmatch(r":?-+:?", x) for x in c)]
             t = ['<div class="wide"><table><thead><tr>' + "".join(f"<th>{inline(c, out_dir)}</th>" for c in cells[0]) + "</tr></thead><tbody>"]
             for r in body:
-                t.append("<tr>" + "".join(f"<td{verdict_class(inline(c, out_dir))}>{inline(c, out_dir)}</td>"
+                t.append("<tr>" + "".join(f"<td{verdict_class(inline(c, out_dir))}>{fold(inline(c, out_dir))}</td>"
                                           for c in r) + "</tr>")
             out.append("".join(t) + "</tbody></table></div>")
             rows.clear()
@@ -122,70 +131,8 @@ def markdown_to_html(md, out_dir):
     return out, toc
 
 
-def episode_table(run, run_arg):
-    """Fig. 2A per environment, every number linked to the export command of its episode (HTML lines)"""
-    with h5py.File(run, "r") as f:
-        if "deploy" not in f or "deploy/collectives/travel_bl" not in f:
-            return []
-        d = f["deploy"]
-        envs = _s(d.attrs["environments"]).split(",")
-        types = _s(d.attrs["types"]).split(",")
-        ct, cs = d["collectives/travel_bl"][()], d["collectives/status"][()]
-        at, ast = d["agents/travel_bl"][()], d["agents/status"][()]
-    done = min(len(envs), ct.shape[0])
-    head = ["<h2 id=\"numbers-and-their-episodes\">Fig. 2A per environment: numbers and their episodes</h2>",
-            "<p>Each number is the mean travel (BL) over the ok episodes of its cell; it links to the "
-            "<code>divcoll export</code> command of the cell's median ok episode (replicate 0 for collectives), "
-            "whose scene <code>divcoll simulate</code> turns back into that episode's travel bit for bit.</p>",
-            '<div class="wide"><table><thead><tr><th>environment</th><th>agents alone</th>'
-            + "".join(f"<th>{html.escape(t)}</th>" for t in types) + "</tr></thead><tbody>"]
-    cmds = []
-    for e in range(done):
-        env = envs[e]
-        cells = []
-        ok = (ast[e] == 0) & np.isfinite(at[e])
-        if ok.any():
-            vals = at[e][ok]
-            idx = np.flatnonzero(ok)[np.argsort(vals)[(len(vals) - 1) // 2]]
-            aid = f"ep-{env}-alone"
-            cmds.append((aid, f"divcoll export {run_arg} --what alone --env {env} --agent {idx} --out {env}_agent{idx}.h5",
-                         f"agent {idx} alone in {env}: {at[e][idx]:.3f} BL"))
-            cells.append(f'<td class="num"><a href="#{aid}">{vals.mean():.3f}</a></td>')
-        else:
-            cells.append("<td>—</td>")
-        for t, typ in enumerate(types):
-            v, s = ct[e, t], cs[e, t]
-            ok = (s == 0) & np.isfinite(v)
-            if not ok.any():
-                cells.append("<td>—</td>")
-                continue
-            r0 = (s[0] == 0) & np.isfinite(v[0])
-            mean = v[ok].mean()
-            if r0.any():
-                q = np.flatnonzero(r0)[np.argsort(v[0][r0])[(int(r0.sum()) - 1) // 2]]
-                cid = f"ep-{env}-{typ.replace('@', '-at-')}"
-                cmds.append((cid, f"divcoll export {run_arg} --what pair --env {env} --type {typ} --replicate 0 "
-                                  f"--pair {q} --out {env}_{typ.replace('@', '_at_')}_p{q}.h5",
-                             f"{typ} replicate 0 pair {q} in {env}: {v[0][q]:.3f} BL"))
-                cells.append(f'<td class="num"><a href="#{cid}">{mean:.3f}</a></td>')
-            else:
-                cells.append(f"<td>{mean:.3f}</td>")
-        head.append(f"<tr><td>{html.escape(env)}</td>" + "".join(cells) + "</tr>")
-    head.append("</tbody></table></div><details open><summary>the episodes behind the numbers</summary><ul>")
-    for cid, cmd, what in cmds:
-        head.append(f'<li id="{cid}">{html.escape(what)}: <code>{html.escape(cmd)}</code></li>')
-    head.append("</ul></details>")
-    return head
-
-
 def write(run, out_dir, md):
     body, toc = markdown_to_html(md, out_dir)
-    numbers = episode_table(run, os.path.abspath(run))
-    if numbers:
-        toc.insert(2, ("numbers-and-their-episodes", "Fig. 2A per environment: numbers and their episodes"))
-        # after the claims table
-        k = next((i for i, b in enumerate(body) if 'id="stages-and-numbers"' in b), len(body))
-        body = body[:k] + numbers + body[k:]
     nav = "<nav><strong>Contents</strong>: " + " · ".join(
         f'<a href="#{a}">{inline(t, out_dir)}</a>' for a, t in toc) + "</nav>"
     title = html.escape(f"divcoll report: {os.path.basename(run)}")

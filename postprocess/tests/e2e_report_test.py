@@ -8,8 +8,10 @@ image and video loads, no console error; skipped with the reason where Chromium 
 Run by ctest as postprocess.e2e_report (its own test: it takes minutes, not seconds). Not named test_*.py, so
 the quick `unittest discover` of postprocess.unittest leaves it out.
 """
+import html
 import os
 import re
+import shlex
 import shutil
 import stat
 import subprocess
@@ -149,18 +151,24 @@ class EndToEnd(unittest.TestCase):
                                                              "deployment.mp4"))
         self.assertGreater(probe(os.path.join(out, "supplementary_movie.mp4"))[2], parts)  # plus the title cards
 
+    @classmethod
+    def report_page(cls):
+        """`divcoll report` of the tiny run, made once: (stdout, report.html's path, its text)"""
+        if not hasattr(cls, "_page"):
+            out = os.path.join(cls.dir, "report")
+            p = run([BIN, "report", cls.run_file, "--out", out])
+            page = os.path.join(out, "report.html")
+            with open(page) as fh:
+                cls._page = (p.stdout, page, fh.read())
+        return cls._page
+
     def test_report_html_loads_in_chromium(self):
-        out = os.path.join(self.dir, "report")
-        p = run([BIN, "report", self.run_file, "--out", out])
-        self.assertIn("report.html", p.stdout)
-        page = os.path.join(out, "report.html")
-        with open(page) as fh:
-            text = fh.read()
+        stdout, page, text = self.report_page()
+        self.assertIn("report.html", stdout)
         self.assertIn("Preset <code>tiny</code>", text)
         self.assertIn("too small to judge", text)
+        self.assertIn("paper-scale report is pending", text)
         self.assertIn("<video controls", text)
-        self.assertRegex(text, r'href="#ep-flat-weak_diverse-at-diverse"')
-        self.assertIn("--what pair --env flat --type weak_diverse@diverse --replicate 0 --pair", text)
         self.assertNotRegex(text, r'src="https?://')  # nothing from the network
         try:
             problems, facts = html_check.check(page, os.path.join(self.dir, "shot.png"))
@@ -170,6 +178,45 @@ class EndToEnd(unittest.TestCase):
         self.assertGreaterEqual(len(facts["imgs"]), 6)  # the figures
         self.assertGreaterEqual(len(facts["vids"]), 1)
         self.assertTrue(all(v["width"] >= 1280 for v in facts["vids"]), facts["vids"])
+
+    # item 5: every number links to the `divcoll export` command of its episode, and the commands run
+    def test_report_links_numbers_to_export_commands_that_run(self):
+        _, _, text = self.report_page()
+        ids = set(re.findall(r'<li id="(ep-[^"]+)"', text))
+        hrefs = re.findall(r'href="#(ep-[^"]+)"', text)
+        self.assertTrue(hrefs)
+        self.assertEqual(sorted(set(hrefs) - ids), [])  # every link has its episode
+        self.assertEqual(sorted(ids - set(hrefs)), [])  # and every listed episode is linked from a number
+        # the claims table: one row per claim, its episodes column linking wherever the claim has episodes
+        claims_table = text[text.index('id="the-paper-s-claims-beside-this-run"'):]
+        claims_table = claims_table[:claims_table.index("</table>")]
+        rows = re.findall(r"<tr>(.*?)</tr>", claims_table)[1:]
+        self.assertEqual(len(rows), 19)
+        unlinked = [r[:80] for r in rows if 'href="#ep-' not in r]
+        self.assertEqual(len(unlinked), 1, unlinked)  # only the connector-training batches claim
+        self.assertIn("connector-training batches are not exported", unlinked[0] + claims_table)
+        for kind in ("alone", "weak_diverse-at-diverse", "spec-", "chain-"):
+            self.assertTrue(any(kind in h for h in hrefs), kind)
+        # Fig. 2A per environment and the movie caption link single episodes
+        self.assertIn('href="#ep-flat-weak_diverse-at-diverse"', text)
+        self.assertRegex(text, r'href="#ep-\w+-weak_uniform-at-uniform-r0-p0"')
+        # run one listed command pair as printed: the exported scene's travel is the page's, and simulate
+        # reproduces the run file's travel bit for bit
+        item = re.search(r'<li id="ep-ice-weak_diverse-at-diverse">(.*?)</li>', text).group(1)
+        shown = float(re.search(r", (-?[0-9.]+) BL", item).group(1))
+        cmds = [html.unescape(c) for c in re.findall(r"<code>(divcoll [^<]+)</code>", item)]
+        self.assertEqual([c.split()[1] for c in cmds], ["export", "simulate"])
+        work = os.path.join(self.dir, "from_page")
+        os.makedirs(work, exist_ok=True)
+        outs = [subprocess.run([BIN] + shlex.split(c)[1:], capture_output=True, text=True, cwd=work) for c in cmds]
+        self.assertEqual([o.returncode for o in outs], [0, 0], [o.stderr for o in outs])
+        stored = re.search(r"records travel (\S+) u \((\S+) BL\), status ok", outs[0].stdout)
+        self.assertIsNotNone(stored, outs[0].stdout)
+        self.assertAlmostEqual(float(stored.group(2)), shown, places=3)
+        import h5py
+        traj = shlex.split(cmds[1])[shlex.split(cmds[1]).index("--out") + 1]
+        with h5py.File(os.path.join(work, traj), "r") as f:
+            self.assertEqual(float(f.attrs["travel"]), float(stored.group(1)))
 
     def test_chromium_check_finds_a_broken_image_a_missing_video_and_a_console_error(self):
         page = os.path.join(self.dir, "broken.html")
