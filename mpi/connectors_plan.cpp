@@ -63,9 +63,7 @@ class ConnectorsPlan : public Plan {
         N_(static_cast<int>(slots.size())), B_(spec.batch_pairs), I_(spec.iterations),
         pop_(static_cast<int>(agents.size())), Pc_(sim::connector_param_count()), sg_(spec.state_group + "/state/") {}
 
-  std::string label() const override { return spec_.label; }
-  std::string group() const override { return spec_.state_group; }
-  std::string item_word() const override { return "pair-episodes"; }
+  Info info() const override { return {spec_.label, spec_.state_group, "iterations_done", "iteration", "pair-episodes"}; }
   int rounds() const override { return I_; }
   void take_input(int, const std::string& input) override { weights_ = unpack<std::vector<double>>(input); }
   // master: the trained weights, once finished

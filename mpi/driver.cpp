@@ -65,7 +65,8 @@ void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& recor
       case 0: write(double{}); break;
       case 1: write(int64_t{}); break;
       case 2: write(int32_t{}); break;
-      default: write(uint8_t{}); break;
+      case 3: write(uint8_t{}); break;
+      default: write(float{}); break;
     }
   }
 }
@@ -74,11 +75,20 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
            const std::function<void()>& checkpoint) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  const std::string label = plan.label();
-  if (!file.has(plan.group())) file.create_group(plan.group());
-  io::h5::Node group = file.group(plan.group());
+  const Plan::Info info = plan.info();
+  const std::string& label = info.label;
+  if (!file.has(info.group)) file.create_group(info.group);
+  io::h5::Node group = file.group(info.group);
+  if (info.owns_stage) {
+    group.write_string("status", "running");
+    for (const Attribute& a : plan.attributes()) {
+      if (const auto* text = std::get_if<std::string>(&a.value)) group.write_string(a.name, *text);
+      else group.write_int(a.name, std::get<int64_t>(a.value));
+    }
+    write_records(comm, file, rank == 0 ? plan.setup() : Records{});
+  }
   const int R = plan.rounds();
-  const int done = group.has_attribute(plan.counter()) ? static_cast<int>(group.read_int(plan.counter())) : 0;
+  const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
   // where to start: the state committed with the counter (the master's plan holds it)
   if (rank == 0) {
@@ -87,14 +97,14 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
       for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
     plan.start(done, stored);
     if (done >= R)
-      std::printf("%s: all %d %ss were already done\n", label.c_str(), R, plan.round_word().c_str());
+      std::printf("%s: all %d %ss were already done\n", label.c_str(), R, info.round_word.c_str());
     else if (done > 0)
-      std::printf("%s: resuming after %s %d\n", label.c_str(), plan.round_word().c_str(), done);
+      std::printf("%s: resuming after %s %d\n", label.c_str(), info.round_word.c_str(), done);
   }
   auto commit = [&](int rounds_done) {
     write_records(comm, file, rank == 0 ? plan.state() : Records{});
-    debug_exit_in_commit(comm, file, plan.group(), rounds_done);
-    group.write_int(plan.counter(), rounds_done);
+    debug_exit_in_commit(comm, file, info.group, rounds_done);
+    group.write_int(info.counter, rounds_done);
     checkpoint();
   };
 
@@ -111,23 +121,28 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
       const double now = since(t_stage);
       if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
         last_print = now;
-        std::printf("%s: %s %d/%d, %d/%d %s, %.1f s\n", label.c_str(), plan.round_word().c_str(), r + 1, R, k, n,
-                    plan.item_word().c_str(), now);
+        std::printf("%s: %s %d/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), r + 1, R, k, n,
+                    info.item_word.c_str(), now);
         std::fflush(stdout);
       }
     };
     farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
     write_records(comm, file, rank == 0 ? plan.end_round(r) : Records{});
     if (r >= R) continue;  // the closing round: recorded, not counted
-    if ((r + 1) % cfg.output.checkpoint_every == 0 || r + 1 == R) commit(r + 1);
+    const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
+    if ((r + 1) % every == 0 || r + 1 == R) commit(r + 1);
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
-      std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), plan.round_word().c_str(), r + 1, R,
-                  plan.summary(r).c_str(), items.size() / dt, plan.item_word().c_str(), el, (R - r - 1) * dt);
+      std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(), r + 1, R,
+                  plan.summary(r).c_str(), items.size() / dt, info.item_word.c_str(), el, (R - r - 1) * dt);
       std::fflush(stdout);
     }
   }
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
+  if (info.owns_stage) {
+    group.write_string("status", "complete");
+    checkpoint();
+  }
 }
 
 }  // namespace divcoll::mpi

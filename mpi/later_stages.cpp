@@ -12,6 +12,7 @@
 #include "mpi/agents_stage.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
+#include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
 
@@ -47,6 +48,19 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
   return idx;
 }
 
+// one agent alone, a pair (or, with `chains`, a heap-order chain), forward only
+EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<collective::Agent>& agents,
+                          const std::vector<std::vector<double>>& weights, double stiffness,
+                          const std::vector<std::string>& envs, int steps, bool chains) {
+  std::vector<const collective::Agent*> ptr;
+  for (int32_t a : e.agents) ptr.push_back(&agents[a]);
+  const collective::PairOutcome o =
+      ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
+      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], stiffness, envs[e.env], steps, false)
+                      : collective::run_chain(sim, ptr, weights[e.weights], stiffness, envs[e.env], steps);
+  return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
+}
+
 // farms pair (or, with `chains`, heap-order chain) episodes, forward only, and returns their outcomes on rank 0
 std::vector<EpisodeDone> run_episodes(MPI_Comm comm, const std::vector<GroupEpisode>& episodes,
                                       const std::vector<collective::Agent>& agents,
@@ -59,14 +73,7 @@ std::vector<EpisodeDone> run_episodes(MPI_Comm comm, const std::vector<GroupEpis
     for (const auto& e : episodes) items.push_back(pack(e));
   sim::Simulator sim;
   auto compute = [&](const std::string& bytes) {
-    const GroupEpisode e = unpack<GroupEpisode>(bytes);
-    std::vector<const collective::Agent*> ptr;
-    for (int32_t a : e.agents) ptr.push_back(&agents[a]);
-    const collective::PairOutcome o =
-        ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
-        : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], stiffness, envs[e.env], steps, false)
-                        : collective::run_chain(sim, ptr, weights[e.weights], stiffness, envs[e.env], steps);
-    return pack(EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)});
+    return pack(group_episode(sim, unpack<GroupEpisode>(bytes), agents, weights, stiffness, envs, steps, chains));
   };
   const FarmResult fr = farm(comm, items, compute);
   std::vector<EpisodeDone> out;
@@ -84,6 +91,7 @@ std::pair<double, int> ok_mean(const std::vector<EpisodeDone>& d, size_t b, size
     else ++bad;
   return {n ? s / n : NAN, bad};
 }
+
 
 }  // namespace
 
@@ -155,90 +163,108 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   checkpoint();
 }
 
-void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                       const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const auto& Sc = cfg.scaling;
-  const std::vector<std::string>& envs = cfg.deploy.environments;
-  const int E = static_cast<int>(envs.size()), NS = static_cast<int>(Sc.sizes.size()), D = Sc.draws;
-  const int R = cfg.connectors.replicates;
-  const std::vector<collective::Agent> agents = load_population(comm, file);
-  const int pop = static_cast<int>(agents.size());
-  // weights 0..R−1: weak uniform-trained; R..2R−1: weak diverse-trained
-  std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
-  for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
+namespace {
 
-  if (!file.has("scaling")) file.create_group("scaling");
-  io::h5::Node stage = file.group("scaling");
-  stage.write_string("status", "running");
-  stage.write_string("environments", join(envs));
-  stage.write_string("variants", "uniform,diverse");
-  {
-    std::vector<int64_t> rows, s;
-    if (rank == 0)
-      for (int si = 0; si < NS; ++si) rows.push_back(si), s.push_back(Sc.sizes[si]);
-    file.write_rows<int64_t>("scaling/sizes", {static_cast<hsize_t>(NS)}, rows, s);
+// the scaling chains (SPEC §7.4) as a plan: one round per environment, one item per chain
+// (size × variant × replicate × draw); the chains: uniform = N clones of agent `draw`; diverse = N distinct
+// agents drawn per (size, replicate, draw); both in heap order. Weights 0..R−1: weak uniform-trained;
+// R..2R−1: weak diverse-trained
+class ScalingPlan final : public Plan {
+ public:
+  ScalingPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, std::vector<std::vector<double>> weights)
+      : cfg_(cfg), S_(cfg.scaling), agents_(agents), weights_(std::move(weights)),
+        E_(static_cast<int>(cfg.deploy.environments.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
+        R_(cfg.connectors.replicates), chains_(NS_ * 2) {
+    const int pop = static_cast<int>(agents.size());
+    for (int si = 0; si < NS_; ++si)
+      for (int r = 0; r < R_; ++r)
+        for (int q = 0; q < D_; ++q) {
+          chains_[si * 2].push_back(std::vector<int32_t>(S_.sizes[si], q));
+          Rng rng = make_rng(cfg.run.seed, kScalingStage + si, static_cast<uint64_t>(r) * D_ + q);
+          chains_[si * 2 + 1].push_back(distinct_agents(rng, pop, S_.sizes[si]));
+        }
   }
-  // the chains: uniform = N clones of agent i (i < draws); diverse = N distinct agents drawn per
-  // (size, replicate, draw); both in heap order
-  std::vector<std::vector<std::vector<int32_t>>> chains(NS * 2);  // [size·2 + variant][replicate·D + draw]
-  for (int si = 0; si < NS; ++si) {
-    const int n = Sc.sizes[si];
-    std::vector<int64_t> rows;
-    std::vector<int32_t> flat;
-    for (int r = 0; r < R; ++r)
-      for (int q = 0; q < D; ++q) {
-        chains[si * 2].push_back(std::vector<int32_t>(n, q));
-        Rng rng = make_rng(cfg.run.seed, kScalingStage + si, static_cast<uint64_t>(r) * D + q);
-        chains[si * 2 + 1].push_back(distinct_agents(rng, pop, n));
-        if (rank == 0) rows.push_back(static_cast<int64_t>(r) * D + q), flat.insert(flat.end(), chains[si * 2 + 1].back().begin(), chains[si * 2 + 1].back().end());
+  Info info() const override { return {"scaling", "scaling", "envs_done", "environment", "chains", 1, true}; }
+  int rounds() const override { return E_; }
+  std::vector<Attribute> attributes() const override {
+    return {{"environments", join(cfg_.deploy.environments)}, {"variants", std::string("uniform,diverse")}};
+  }
+  Records setup() override {
+    Records out = {{"scaling/sizes", {static_cast<uint64_t>(NS_)}, {}, std::vector<int64_t>{}}};
+    for (int si = 0; si < NS_; ++si) {
+      out[0].rows.push_back(si);
+      std::get<std::vector<int64_t>>(out[0].values).push_back(S_.sizes[si]);
+      const int n = S_.sizes[si];
+      Record r{"scaling/n" + std::to_string(n) + "/diverse_agents", {static_cast<uint64_t>(R_) * D_, static_cast<uint64_t>(n)}, {},
+               std::vector<int32_t>{}};
+      for (size_t k = 0; k < chains_[si * 2 + 1].size(); ++k) {
+        r.rows.push_back(static_cast<int64_t>(k));
+        auto& v = std::get<std::vector<int32_t>>(r.values);
+        v.insert(v.end(), chains_[si * 2 + 1][k].begin(), chains_[si * 2 + 1][k].end());
       }
-    file.write_rows<int32_t>("scaling/n" + std::to_string(n) + "/diverse_agents",
-                             {static_cast<hsize_t>(R) * D, static_cast<hsize_t>(n)}, rows, flat);
+      out.push_back(std::move(r));
+    }
+    return out;
   }
-
-  const int done = stage.has_attribute("envs_done") ? static_cast<int>(stage.read_int("envs_done")) : 0;
-  if (rank == 0 && done > 0) std::printf("scaling: resuming after %d environment(s)\n", done);
-  const auto t_stage = std::chrono::steady_clock::now();
-  for (int ei = done; ei < E; ++ei) {
-    std::vector<GroupEpisode> eps;
-    if (rank == 0)
-      for (int si = 0; si < NS; ++si)
-        for (int v = 0; v < 2; ++v)
-          for (int r = 0; r < R; ++r)
-            for (int q = 0; q < D; ++q) eps.push_back({v * R + r, ei, chains[si * 2 + v][static_cast<size_t>(r) * D + q]});
-    const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_uniform"), envs, Sc.episode_steps, true);
-    std::vector<int64_t> rows;
+  void start(int, const StoredState&) override {}
+  std::vector<std::string> items(int ei) override {
+    std::vector<std::string> items;
+    for (int si = 0; si < NS_; ++si)
+      for (int v = 0; v < 2; ++v)
+        for (int r = 0; r < R_; ++r)
+          for (int q = 0; q < D_; ++q)
+            items.push_back(pack(GroupEpisode{v * R_ + r, ei, chains_[si * 2 + v][static_cast<size_t>(r) * D_ + q]}));
+    done_.clear();
+    return items;
+  }
+  std::string compute(const std::string& bytes) override {
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, io::stiffness(cfg_, "weak_uniform"),
+                              cfg_.deploy.environments, S_.episode_steps, true));
+  }
+  void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
+  Records end_round(int ei) override {
     std::vector<double> tu, tb;
     std::vector<uint8_t> st;
-    if (rank == 0) {
-      rows.push_back(ei);
-      for (const auto& x : d) tu.push_back(x.travel_u), tb.push_back(x.travel_bl), st.push_back(x.status);
-    }
-    const Dims dims = {static_cast<hsize_t>(E), static_cast<hsize_t>(NS), 2, static_cast<hsize_t>(R), static_cast<hsize_t>(D)};
-    file.write_rows<double>("scaling/travel_u", dims, rows, tu);
-    file.write_rows<double>("scaling/travel_bl", dims, rows, tb);
-    file.write_rows<uint8_t>("scaling/status", dims, rows, st);
-    stage.write_int("envs_done", ei + 1);
-    checkpoint();
-    if (rank == 0) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count();
-      std::printf("scaling: %-11s (%d/%d)", envs[ei].c_str(), ei + 1, E);
-      for (int si = 0; si < NS; ++si)
-        for (int v = 0; v < 2; ++v) {
-          const size_t b = (static_cast<size_t>(si) * 2 + v) * R * D;
-          const auto [m, bad] = ok_mean(d, b, b + static_cast<size_t>(R) * D);
-          std::printf(" N=%d %s %.3f%s", Sc.sizes[si], v ? "diverse" : "uniform", m,
-                      bad ? (" (" + std::to_string(bad) + " not ok)").c_str() : "");
-        }
-      std::printf(" BL | %.0f s, ETA %.0f s\n", el, el / (ei + 1 - done) * (E - ei - 1));
-      std::fflush(stdout);
-    }
+    for (const auto& x : done_) tu.push_back(x.travel_u), tb.push_back(x.travel_bl), st.push_back(x.status);
+    const std::vector<uint64_t> dims = {static_cast<uint64_t>(E_), static_cast<uint64_t>(NS_), 2, static_cast<uint64_t>(R_),
+                                        static_cast<uint64_t>(D_)};
+    return {{"scaling/travel_u", dims, {ei}, tu}, {"scaling/travel_bl", dims, {ei}, tb}, {"scaling/status", dims, {ei}, st}};
   }
-  stage.write_string("status", "complete");
-  checkpoint();
+  std::string summary(int ei) const override {
+    std::string s = cfg_.deploy.environments[ei] + ":";
+    char b[160];
+    for (int si = 0; si < NS_; ++si)
+      for (int v = 0; v < 2; ++v) {
+        const size_t at = (static_cast<size_t>(si) * 2 + v) * R_ * D_;
+        const auto [m, bad] = ok_mean(done_, at, at + static_cast<size_t>(R_) * D_);
+        std::snprintf(b, sizeof b, " N=%d %s %.3f%s", S_.sizes[si], v ? "diverse" : "uniform", m,
+                      bad ? (" (" + std::to_string(bad) + " not ok)").c_str() : "");
+        s += b;
+      }
+    return s + " BL";
+  }
+
+ private:
+  const io::RunConfig& cfg_;
+  const io::RunConfig::Scaling& S_;
+  const std::vector<collective::Agent>& agents_;
+  const std::vector<std::vector<double>> weights_;
+  const int E_, NS_, D_, R_;
+  std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
+  sim::Simulator sim_;
+  std::vector<EpisodeDone> done_;
+};
+
+}  // namespace
+
+void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
+                       const std::function<void()>& checkpoint) {
+  const int R = cfg.connectors.replicates;
+  const std::vector<collective::Agent> agents = load_population(comm, file);
+  std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
+  for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
+  ScalingPlan plan(cfg, agents, std::move(weights));
+  drive(comm, cfg, file, plan, checkpoint);
 }
 
 void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,

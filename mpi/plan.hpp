@@ -22,9 +22,15 @@ struct Record {
   std::string path;
   std::vector<uint64_t> dims;
   std::vector<int64_t> rows;
-  std::variant<std::vector<double>, std::vector<int64_t>, std::vector<int32_t>, std::vector<uint8_t>> values;
+  std::variant<std::vector<double>, std::vector<int64_t>, std::vector<int32_t>, std::vector<uint8_t>, std::vector<float>> values;
 };
 using Records = std::vector<Record>;
+
+// an attribute of the plan's group: text or an integer
+struct Attribute {
+  std::string name;
+  std::variant<std::string, int64_t> value;
+};
 
 // the committed state read back at resume: dataset path -> its values (row-major)
 using StoredState = std::map<std::string, std::vector<double>>;
@@ -34,13 +40,23 @@ class Plan {
   virtual ~Plan() = default;
 
   // ---- what it is ----
-  virtual std::string label() const = 0;          // progress lines ("connectors", "graded/p1 agents", ...)
-  virtual std::string group() const = 0;          // the run-file group holding its round counter
-  virtual std::string counter() const { return "iterations_done"; }  // that counter's attribute
-  virtual std::string round_word() const { return "iteration"; }     // progress lines
-  virtual std::string item_word() const { return "items"; }          // progress lines (per second)
-  virtual int rounds() const = 0;                  // counted rounds: 0 .. rounds()-1
+  struct Info {
+    std::string label;                        // progress lines ("connectors", "graded same_shape", ...)
+    std::string group;                        // the run-file group holding its round counter
+    std::string counter = "iterations_done";  // that counter's attribute
+    std::string round_word = "iteration";     // progress lines
+    std::string item_word = "items";          // progress lines (per second)
+    int commit_every = 0;                     // rounds per commit; 0: output.checkpoint_every
+    // a stage of its own (else a part of one, e.g. connector training inside the specialists stage): the
+    // driver then sets the group's status ("running", then "complete" with a last checkpoint), writes
+    // attributes() (every rank: the same values) and setup() (master: rows drawn once) when it starts
+    bool owns_stage = false;
+  };
+  virtual Info info() const = 0;
+  virtual int rounds() const = 0;                       // counted rounds: 0 .. rounds()-1
   virtual bool closing_round() const { return false; }  // one more, uncounted round (index rounds()), redone on resume
+  virtual std::vector<Attribute> attributes() const { return {}; }
+  virtual Records setup() { return {}; }
 
   // ---- state ----
   // the datasets of its state (restore() gets them back after a resume)
