@@ -1,9 +1,13 @@
 // A/B driver for the engine (README "Engine speed-up"): the same fixed work through one build's engine,
 // timed by the thread's CPU time, so that two builds can be compared on a busy machine. Not built by CMake.
-//   g++ -std=c++20 -O3 -march=native -ffp-contract=off [-DHAS_AGRAD] -I TREE/src -I TREE jobs/engine_ab_driver.cpp
-//       TREE/build/libdivcoll_core.a -o ab -ltomlplusplus -lboost_serialization
-//   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20; HAS_AGRAD for trees that
-//   have RunOptions::agent_param_grad) prints scene-steps per CPU second, CPU seconds and a checksum
+//   today's tree (one library per layer):
+//   g++ -std=c++20 -O3 -march=native -ffp-contract=off -DHAS_AGRAD -I TREE/src -I TREE jobs/engine_ab_driver.cpp
+//       TREE/build/libdivcoll_science.a TREE/build/libdivcoll_config.a TREE/build/libdivcoll_engine.a -o ab
+//       -ltomlplusplus -lpagmo
+//   dea5a14 (one libdivcoll_core.a, no RunOptions::agent_param_grad): the same without -DHAS_AGRAD, linking
+//       TREE/build/libdivcoll_core.a -ltomlplusplus -lboost_serialization
+//   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20) prints scene-steps per CPU
+//   second, CPU seconds and a checksum (equal checksums: the same bits). jobs/engine_ab.py runs two in turn.
 #include <cstdio>
 #include <ctime>
 #include <cstdlib>

@@ -13,17 +13,31 @@ std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node
   MPI_Comm_rank(comm, &rank);
   // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
   // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
-  const bool stored = group == "agents" && file.has(kAnchors);
+  const std::string at = io::anchors_path(group);
+  const bool stored = file.has(at);
   std::vector<collective::Agent> agents;
   if (rank == 0) {
     for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
-    if (stored) io::read_anchors(file, kAnchors, agents);
+    if (stored) io::read_anchors(file, at, agents);
   }
   agents = broadcast(comm, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
   if (!stored)
     for (auto& a : agents) a.anchors = collective::compute_anchors(a);
   return agents;
+}
+
+void store_anchors(MPI_Comm comm, const io::h5::File& file, const std::string& group,
+                   const std::vector<collective::Agent>& agents) {
+  const std::string at = io::anchors_path(group);
+  if (file.has(at)) return;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::vector<int64_t> rows(agents.size());
+  std::iota(rows.begin(), rows.end(), 0);
+  if (rank != 0) rows.clear();
+  file.write_rows<int32_t>(at, {static_cast<hsize_t>(agents.size()), 4}, rows,
+                           rank == 0 ? io::anchors_rows(agents) : std::vector<int32_t>{});
 }
 
 void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
@@ -34,20 +48,13 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   const std::vector<std::string>& kinds = C.kinds;
   const int K = static_cast<int>(kinds.size()), R = C.replicates;
   const std::vector<collective::Agent> agents = load_population(comm, file);
-  const int pop = static_cast<int>(agents.size());
 
   if (!file.has("connectors")) file.create_group("connectors");
   io::h5::Node stage = file.group("connectors");
   stage.write_string("status", "running");
   stage.write_string("kinds", join(kinds));
   stage.write_int("replicates", R);
-  if (!file.has(kAnchors)) {
-    std::vector<int64_t> rows(pop);
-    std::iota(rows.begin(), rows.end(), 0);
-    if (rank != 0) rows.clear();
-    file.write_rows<int32_t>(kAnchors, {static_cast<hsize_t>(pop), 4}, rows,
-                             rank == 0 ? io::anchors_rows(agents) : std::vector<int32_t>{});
-  }
+  store_anchors(comm, file, "agents", agents);
   // connector c = kind·R + replicate, trained on flat
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)

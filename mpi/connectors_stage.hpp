@@ -9,7 +9,7 @@
 //   <kind>/curve_bl    (I × R)     the same in body lengths
 //   <kind>/nan_pairs   (I × R)     pairs of the batch whose episode was not ok (left out of the mean)
 //   state/params, state/adam_m, state/adam_v  (K·R × P_c)  the optimizer state at the last checkpoint
-//   anchors            (P × 4)     each agent's back foot, front foot, back upper, front upper (§6.1)
+//   anchors            (P × 4)     each agent's back foot, front foot, back upper, front upper (§6.1), stored once
 #pragma once
 
 #include <mpi.h>
@@ -25,13 +25,14 @@
 namespace divcoll::mpi {
 
 inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
-// where the main population's anchors are stored (written by this stage, read by every later one)
-inline constexpr const char* kAnchors = "connectors/anchors";
-
-// the final agent population of the run file on every rank, with its anchors: the stored ones for the main
-// population once the connectors stage wrote them, otherwise computed (deterministically)
+// the final agent population of the run file on every rank, with its anchors: the stored ones
+// (io::anchors_path: connectors/anchors, graded/<name>/connectors/anchors) once its connector training stored
+// them, otherwise computed (deterministically)
 std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file,
                                                const std::string& group = "agents");
+// stores the anchors of `agents` (the population of `group`) once, at io::anchors_path(group)
+void store_anchors(MPI_Comm comm, const io::h5::File& file, const std::string& group,
+                   const std::vector<collective::Agent>& agents);
 
 // one connector being trained: its springs' stiffness, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its

@@ -333,8 +333,9 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       run_agents_stage(comm, pc, file, checkpoint, spec);
     const std::vector<collective::Agent> agents = load_population(comm, file, spec.group);
 
-    // 2. weak connectors trained on diverse pairs of this population, on flat
+    // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
     if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
+    store_anchors(comm, file, spec.group, agents);
     std::vector<ConnectorSlot> slots;
     for (int r = 0; r < R; ++r)
       slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,

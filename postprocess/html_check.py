@@ -117,9 +117,12 @@ def check(page, screenshot=None, width=1280, height=2000):
 
     args = [exe, *FLAGS, f"--user-data-dir={profile}", "--remote-debugging-pipe", f"--window-size={width},{height}",
             "about:blank"]
+    # Chromium's stderr goes to a file, not a pipe nobody drains (a full pipe would stall it)
+    err_path = os.path.join(profile, "stderr.txt")
     try:
-        proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                pass_fds=(3, 4), preexec_fn=child_fds)
+        with open(err_path, "wb") as err_file:
+            proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err_file,
+                                    pass_fds=(3, 4), preexec_fn=child_fds)
     except OSError as e:
         shutil.rmtree(profile, ignore_errors=True)
         raise CannotStart(f"cannot start {exe}: {e}")
@@ -131,7 +134,8 @@ def check(page, screenshot=None, width=1280, height=2000):
         try:
             target = cdp.send("Target.createTarget", {"url": "about:blank"}, timeout=60)["targetId"]
         except (RuntimeError, TimeoutError) as e:
-            err = proc.stderr.read1(4000).decode(errors="replace") if proc.poll() is not None else ""
+            with open(err_path, "rb") as fh:
+                err = fh.read(4000).decode(errors="replace") if proc.poll() is not None else ""
             raise CannotStart(f"{exe} did not answer on the DevTools pipe ({e}) {err.strip()[:300]}")
         session = cdp.send("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
         for dom in ("Runtime", "Log", "Page", "Network"):

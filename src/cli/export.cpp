@@ -52,8 +52,9 @@ int export_scene(const ExportArgs& a) {
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
   // pairs and chains need the anchors the connectors stage stored (the ones every stage used)
   auto with_anchors = [&] {
-    DIVCOLL_THROW_UNLESS(f.has("connectors/anchors"), a.run << " has no connectors/anchors: run the connectors stage first");
-    io::read_anchors(f, "connectors/anchors", agents);
+    const std::string at = io::anchors_path("agents");
+    DIVCOLL_THROW_UNLESS(f.has(at), a.run << " has no " << at << ": run the connectors stage first");
+    io::read_anchors(f, at, agents);
   };
   const int pop = static_cast<int>(agents.size());
 

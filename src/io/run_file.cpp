@@ -138,7 +138,8 @@ std::vector<Entry> base_entries() {
       // connectors (SPEC §6)
       G("connectors", "status,kinds,replicates,iterations_done," + kTiming,
         "the connectors stage: every kind and replicate trained by backpropagation through its pairs", true),
-      D("connectors/anchors", "int32", "agent,anchor", "index", "each agent's anchor masses (SPEC §6.1)"),
+      D("connectors/anchors", "int32", "agent,anchor", "index",
+        "each agent's anchor masses (SPEC §6.1), stored once with the population's connectors and read back", true),
       G("connectors/{kind}", "", "one connector kind: weak_uniform, weak_diverse, strong_uniform, strong_diverse", true),
       D("connectors/{kind}/params", "float64", "replicate,connector_weight", "1", "trained weights", true),
       D("connectors/{kind}/curve_u", "float64", "iteration,replicate", "u",

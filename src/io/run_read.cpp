@@ -109,6 +109,14 @@ std::vector<double> read_weights_row(const h5::Node& file, const std::string& gr
   return split_weights(w, d[0])[row];
 }
 
+std::string anchors_path(const std::string& population_group) {
+  const std::string tail = "agents";
+  DIVCOLL_THROW_UNLESS(population_group.size() >= tail.size() &&
+                           population_group.compare(population_group.size() - tail.size(), tail.size(), tail) == 0,
+                       "not a population group: " << population_group);
+  return population_group.substr(0, population_group.size() - tail.size()) + "connectors/anchors";
+}
+
 std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents) {
   std::vector<int32_t> an;
   for (const auto& a : agents) {

@@ -30,6 +30,9 @@ std::vector<std::vector<double>> read_weights(const h5::Node& file, const std::s
 // one replicate's row of `<group>/params` (any number of rows in the file; `row` checked against it)
 std::vector<double> read_weights_row(const h5::Node& file, const std::string& group, int row);
 
+// where the anchors of the population in `population_group` are stored: `<prefix>connectors/anchors` for
+// `<prefix>agents` (connectors/anchors for the main population, graded/<name>/connectors/anchors for a graded one)
+std::string anchors_path(const std::string& population_group);
 // the anchors of a population as stored (population × 4: back foot, front foot, back upper, front upper)
 std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents);
 // the stored anchors set on `agents` (which must match the dataset's row count)
