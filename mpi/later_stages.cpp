@@ -1,6 +1,6 @@
 #include "mpi/later_stages.hpp"
 
-#include <chrono>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -14,12 +14,10 @@
 #include "mpi/deploy_stage.hpp"
 #include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
-#include "mpi/scheduler.hpp"
 
 namespace divcoll::mpi {
 namespace {
 
-using io::h5::Dims;
 
 // a pair or chain episode: the agents (heap order), which connector weights, which environment
 struct GroupEpisode {
@@ -61,27 +59,6 @@ EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std:
   return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
 }
 
-// farms pair (or, with `chains`, heap-order chain) episodes, forward only, and returns their outcomes on rank 0
-std::vector<EpisodeDone> run_episodes(MPI_Comm comm, const std::vector<GroupEpisode>& episodes,
-                                      const std::vector<collective::Agent>& agents,
-                                      const std::vector<std::vector<double>>& weights, double stiffness,
-                                      const std::vector<std::string>& envs, int steps, bool chains) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  std::vector<std::string> items;
-  if (rank == 0)
-    for (const auto& e : episodes) items.push_back(pack(e));
-  sim::Simulator sim;
-  auto compute = [&](const std::string& bytes) {
-    return pack(group_episode(sim, unpack<GroupEpisode>(bytes), agents, weights, stiffness, envs, steps, chains));
-  };
-  const FarmResult fr = farm(comm, items, compute);
-  std::vector<EpisodeDone> out;
-  if (rank == 0)
-    for (const auto& r : fr.results) out.push_back(unpack<EpisodeDone>(r));
-  return out;
-}
-
 // mean over ok episodes [b, e) of `d`, and how many were not ok
 std::pair<double, int> ok_mean(const std::vector<EpisodeDone>& d, size_t b, size_t e) {
   double s = 0;
@@ -92,13 +69,76 @@ std::pair<double, int> ok_mean(const std::vector<EpisodeDone>& d, size_t b, size
   return {n ? s / n : NAN, bad};
 }
 
+// pairs (and agents alone) in several environments, forward only, as a plan: one round per environment,
+// its items from `round_items`; the round's results, in item order, are cut into consecutive parts, and
+// part k is row e of <parts[k].group>/travel_u, travel_bl and status (dims: environments × parts[k].dims)
+class EpisodesPlan final : public Plan {
+ public:
+  struct Part {
+    std::string group;
+    std::vector<uint64_t> dims;  // after the environment axis; the part's items: their product
+  };
+  using Summary = std::function<std::string(int env, const std::vector<EpisodeDone>& round)>;
+  EpisodesPlan(std::string label, std::string group, const std::vector<collective::Agent>& agents,
+               std::vector<std::vector<double>> weights, double stiffness, std::vector<std::string> envs, int steps,
+               std::vector<Part> parts, std::function<std::vector<GroupEpisode>(int env)> round_items, Summary summary)
+      : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
+        stiffness_(stiffness), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
+        round_items_(std::move(round_items)), summary_(std::move(summary)) {}
+  Info info() const override { return {label_, group_, "envs_done", "environment", "episodes", 1, false}; }
+  int rounds() const override { return static_cast<int>(envs_.size()); }
+  void start(int, const StoredState&) override {}
+  std::vector<std::string> items(int e) override {
+    std::vector<std::string> items;
+    for (const GroupEpisode& g : round_items_(e)) items.push_back(pack(g));
+    done_.clear();
+    return items;
+  }
+  std::string compute(const std::string& bytes) override {
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, stiffness_, envs_, steps_, false));
+  }
+  void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
+  Records end_round(int e) override {
+    Records out;
+    size_t at = 0;
+    for (const Part& p : parts_) {
+      std::vector<uint64_t> dims = {static_cast<uint64_t>(envs_.size())};
+      dims.insert(dims.end(), p.dims.begin(), p.dims.end());
+      const size_t n = std::accumulate(p.dims.begin(), p.dims.end(), size_t{1}, std::multiplies<>());
+      DIVCOLL_DEMAND(at + n <= done_.size());
+      std::vector<double> tu, tb;
+      std::vector<uint8_t> st;
+      for (size_t q = at; q < at + n; ++q)
+        tu.push_back(done_[q].travel_u), tb.push_back(done_[q].travel_bl), st.push_back(done_[q].status);
+      at += n;
+      out.push_back({p.group + "/travel_u", dims, {e}, std::move(tu)});
+      out.push_back({p.group + "/travel_bl", dims, {e}, std::move(tb)});
+      out.push_back({p.group + "/status", dims, {e}, std::move(st)});
+    }
+    DIVCOLL_DEMAND(at == done_.size());
+    return out;
+  }
+  std::string summary(int e) const override { return summary_(e, done_); }
+
+ private:
+  const std::string label_, group_;
+  const std::vector<collective::Agent>& agents_;
+  const std::vector<std::vector<double>> weights_;
+  const double stiffness_;
+  const std::vector<std::string> envs_;
+  const int steps_;
+  const std::vector<Part> parts_;
+  const std::function<std::vector<GroupEpisode>(int)> round_items_;
+  const Summary summary_;
+  sim::Simulator sim_;
+  std::vector<EpisodeDone> done_;
+};
+
 
 }  // namespace
 
 void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                            const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
   const auto& S = cfg.specialists;
   const std::vector<std::string> envs = novel_environments(cfg);
   const int E = static_cast<int>(envs.size()), R = S.replicates, NP = cfg.deploy.pairs;
@@ -120,45 +160,33 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
 
-  // 2. deploy each in its environment on the deployment stage's diverse pairs
+  // 2. deploy each in its environment on the deployment stage's diverse pairs: one round per environment
   Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
   const auto pairs = collective::random_pairs(prng, pop, NP);
-  std::vector<GroupEpisode> eps;
-  if (rank == 0)
-    for (int e = 0; e < E; ++e)
-      for (int r = 0; r < R; ++r)
-        for (const auto& [a, b] : pairs) eps.push_back({e * R + r, e, {a, b}});
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<EpisodeDone> d =
-      run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
-  std::vector<int64_t> rows;
-  std::vector<double> tu, tb;
-  std::vector<uint8_t> st;
-  if (rank == 0) {
-    for (int e = 0; e < E; ++e) rows.push_back(e);
-    for (const auto& x : d) tu.push_back(x.travel_u), tb.push_back(x.travel_bl), st.push_back(x.status);
-  }
-  const Dims dims = {static_cast<hsize_t>(E), static_cast<hsize_t>(R), static_cast<hsize_t>(NP)};
-  file.write_rows<double>("specialists/travel_u", dims, rows, tu);
-  file.write_rows<double>("specialists/travel_bl", dims, rows, tb);
-  file.write_rows<uint8_t>("specialists/status", dims, rows, st);
-  if (rank == 0) {
-    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("specialists: deployed %zu episodes in %.0f s; best replicate per environment:\n", d.size(), el);
-    for (int e = 0; e < E; ++e) {
-      double best = -INFINITY;
-      int br = -1, bad = 0;
-      for (int r = 0; r < R; ++r) {
-        const size_t b = (static_cast<size_t>(e) * R + r) * NP;
-        const auto [m, nb] = ok_mean(d, b, b + NP);
-        bad += nb;
-        if (std::isfinite(m) && m > best) best = m, br = r;
-      }
-      std::printf("  %-11s replicate %d: %.3f BL%s\n", envs[e].c_str(), br, best,
-                  bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
+  auto round_items = [&](int e) {
+    std::vector<GroupEpisode> eps;
+    for (int r = 0; r < R; ++r)
+      for (const auto& [a, b] : pairs) eps.push_back({e * R + r, e, {a, b}});
+    return eps;
+  };
+  // the best replicate in the environment
+  auto summary = [&](int e, const std::vector<EpisodeDone>& d) {
+    double best = -INFINITY;
+    int br = -1, bad = 0;
+    for (int r = 0; r < R; ++r) {
+      const auto [m, nb] = ok_mean(d, static_cast<size_t>(r) * NP, static_cast<size_t>(r + 1) * NP);
+      bad += nb;
+      if (std::isfinite(m) && m > best) best = m, br = r;
     }
-    std::fflush(stdout);
-  }
+    char b[256];
+    std::snprintf(b, sizeof b, "%s: best replicate %d: %.3f BL%s", envs[e].c_str(), br, best,
+                  bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
+    return std::string(b);
+  };
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, io::stiffness(cfg, "weak_diverse"), envs,
+                    cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
+                    round_items, summary);
+  drive(comm, cfg, file, plan, checkpoint);
   stage.write_string("status", "complete");
   checkpoint();
 }
@@ -269,10 +297,8 @@ void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fi
 
 void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
   const std::vector<std::string>& envs = cfg.deploy.environments;
-  const int E = static_cast<int>(envs.size()), R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
+  const int R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
   const int GP = cfg.graded.population;
   if (!file.has("graded")) file.create_group("graded");
   io::h5::Node stage = file.group("graded");
@@ -347,56 +373,34 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     // 3. agents alone and diverse pairs in every environment
     Rng prng = make_rng(cfg.run.seed, kGradedStage + 100000 * v + 90000, 0);
     const auto pairs = collective::random_pairs(prng, GP, NP);
-    {
-      std::vector<int64_t> rows;
-      std::vector<int32_t> p;
-      if (rank == 0)
-        for (int q = 0; q < NP; ++q) rows.push_back(q), p.push_back(pairs[q].first), p.push_back(pairs[q].second);
-      file.write_rows<int32_t>(base + "/diverse_pairs", {static_cast<hsize_t>(NP), 2}, rows, p);
+    Record dp{base + "/diverse_pairs", {static_cast<uint64_t>(NP), 2}, {}, std::vector<int32_t>{}};
+    for (int q = 0; q < NP; ++q) {
+      dp.rows.push_back(q);
+      std::get<std::vector<int32_t>>(dp.values).insert(std::get<std::vector<int32_t>>(dp.values).end(),
+                                                       {pairs[q].first, pairs[q].second});
     }
-    std::vector<GroupEpisode> eps;
-    if (rank == 0) {
-      for (int e = 0; e < E; ++e)
-        for (int i = 0; i < GP; ++i) eps.push_back({0, e, {i}});
-      for (int e = 0; e < E; ++e)
-        for (int r = 0; r < R; ++r)
-          for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
-    }
-    const std::vector<EpisodeDone> d =
-        run_episodes(comm, eps, agents, weights, io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps, false);
-    std::vector<int64_t> rows;
-    std::vector<double> au, ab, pu, pb;
-    std::vector<uint8_t> as, ps;
-    if (rank == 0) {
-      for (int e = 0; e < E; ++e) rows.push_back(e);
-      for (size_t q = 0; q < d.size(); ++q) {
-        const bool alone = q < static_cast<size_t>(E) * GP;
-        (alone ? au : pu).push_back(d[q].travel_u);
-        (alone ? ab : pb).push_back(d[q].travel_bl);
-        (alone ? as : ps).push_back(d[q].status);
-      }
-    }
-    const hsize_t hE = E, hG = GP, hR = R, hN = NP;
-    file.write_rows<double>(base + "/deploy/agents/travel_u", {hE, hG}, rows, au);
-    file.write_rows<double>(base + "/deploy/agents/travel_bl", {hE, hG}, rows, ab);
-    file.write_rows<uint8_t>(base + "/deploy/agents/status", {hE, hG}, rows, as);
-    file.write_rows<double>(base + "/deploy/pairs/travel_u", {hE, hR, hN}, rows, pu);
-    file.write_rows<double>(base + "/deploy/pairs/travel_bl", {hE, hR, hN}, rows, pb);
-    file.write_rows<uint8_t>(base + "/deploy/pairs/status", {hE, hR, hN}, rows, ps);
+    write_records(comm, file, {dp});
+    auto round_items = [&](int e) {
+      std::vector<GroupEpisode> eps;
+      for (int i = 0; i < GP; ++i) eps.push_back({0, e, {i}});
+      for (int r = 0; r < R; ++r)
+        for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
+      return eps;
+    };
+    auto summary = [&](int e, const std::vector<EpisodeDone>& d) {
+      const size_t n = static_cast<size_t>(R) * NP;
+      char b[256];
+      std::snprintf(b, sizeof b, "%s: alone %.2f, pairs %.2f BL", envs[e].c_str(), ok_mean(d, 0, GP).first,
+                    ok_mean(d, GP, GP + n).first);
+      return std::string(b);
+    };
+    const uint64_t uG = GP, uR = R, uN = NP;
+    EpisodesPlan plan(std::string("graded ") + names[v] + " deploy", base, agents, weights,
+                      io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
+                      {{base + "/deploy/agents", {uG}}, {base + "/deploy/pairs", {uR, uN}}}, round_items, summary);
+    drive(comm, cfg, file, plan, checkpoint);
     g.write_string("status", "complete");
     checkpoint();
-    if (rank == 0) {
-      std::printf("graded %s:", names[v]);
-      for (int e = 0; e < E; ++e) {
-        const auto [am, ab2] = ok_mean(d, static_cast<size_t>(e) * GP, static_cast<size_t>(e + 1) * GP);
-        const size_t pb0 = static_cast<size_t>(E) * GP + static_cast<size_t>(e) * R * NP;
-        const auto [pm, pb2] = ok_mean(d, pb0, pb0 + static_cast<size_t>(R) * NP);
-        std::printf(" %s alone %.2f pairs %.2f;", envs[e].c_str(), am, pm);
-        (void)ab2, (void)pb2;
-      }
-      std::printf(" BL\n");
-      std::fflush(stdout);
-    }
   }
   stage.write_string("status", "complete");
   checkpoint();

@@ -179,7 +179,7 @@ std::vector<Entry> base_entries() {
         "the connector's second hidden layer at the sampled (step, spring); NaN if the episode was not ok"),
       D("deploy/hidden/{type}/index", "int32", "env,replicate,pair,sample", "index", "which: step · 5 + connector spring"),
       // specialists (SPEC §7.3)
-      G("specialists", "status,environments,replicates,iterations_done," + kTiming,
+      G("specialists", "status,environments,replicates,iterations_done,envs_done," + kTiming,
         "weak connectors trained on diverse pairs in each novel environment (environments = the novel ones)"),
       G("specialists/{env}", "", "the specialists of one novel environment"),
       D("specialists/{env}/params", "float64", "replicate,connector_weight", "1", "trained weights"),
@@ -214,7 +214,7 @@ std::vector<Entry> base_entries() {
       G("graded", "status,environments,populations,shape_cells,shape_springs," + kTiming,
         "populations of one body shape (shape_cells, the main population's commonest body; shape_springs its commonest "
         "spring genotype)"),
-      G("graded/{population}", "status,diversity_sources",
+      G("graded/{population}", "status,diversity_sources,envs_done",
         "same_shape (evolved springs) or same_shape_springs (controllers only); holds agents/, connectors/weak_diverse/ "
         "and connectors/state/ as the main run does"),
       D("graded/{population}/diverse_pairs", "int32", "pair,slot", "index", "the agents of each diverse pair"),

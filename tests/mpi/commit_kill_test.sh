@@ -3,8 +3,10 @@
 # counter resumes to the run file of an uninterrupted run. The exit is placed by the program itself (the hidden
 # hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done>: every rank flushes the run file, so what it holds
 # on disk is the new state beside the old counter, then exits), not by time. Cases: the plain connectors plan,
-# the extended one (keep_best, with its closing round), and the graded stage's connectors (where a mismatch
-# after kill and resume was once seen). Usage: commit_kill_test.sh DIVCOLL SOURCE_DIR
+# the extended one (keep_best, with its closing round), the graded stage's connectors (where a mismatch
+# after kill and resume was once seen), and the deployment plans of the specialists and of a graded
+# population (killed after their second environment; specialists.iterations=1, so the specialists'
+# training never commits 2 under the same group). Usage: commit_kill_test.sh DIVCOLL SOURCE_DIR
 set -euo pipefail
 D=$1 SRC=$2
 source "$SRC/jobs/mpi-env.sh"
@@ -32,4 +34,6 @@ check plain connectors:3 'run.stages=["agents","connectors"]' connectors.iterati
 check keep_best connectors:3 'run.stages=["agents","connectors"]' connectors.iterations=5 connectors.keep_best=true \
   connectors.validation_pairs=3
 check graded graded/same_shape/connectors:2 'run.stages=["agents","graded"]' connectors.iterations=3
+check specialists_deploy specialists:2 'run.stages=["agents","specialists"]' specialists.iterations=1
+check graded_deploy graded/same_shape:2 'run.stages=["agents","graded"]' connectors.iterations=1
 echo "commit kill: passed"
