@@ -159,6 +159,14 @@ divcoll_run_resumable() {
 # --signal); divcoll_disarm_timer cancels it
 divcoll_arm_timer() {
   local s=$1 me=$$
+  if [ "$s" -le 0 ]; then
+    # at once: taken as arrived, without a signal. A signal sent now would reach this shell while it parses its
+    # next command substitution, and bash 5.2 then runs the trap inside that parse ("trap: line 2: unexpected
+    # EOF while looking for matching `)'", which ended a job of the PBS test)
+    _divcoll_usr1_pending=1
+    divcoll_log "time-limit warning armed: SIGUSR1 in 0 s (taken as arrived)"
+    return 0
+  fi
   (
     trap 'kill "$_divcoll_sp" 2>/dev/null; exit 0' TERM
     trap '' USR1
