@@ -24,6 +24,7 @@
 #include "common/version.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "cli/commands.hpp"
 #include "io/file_lock.hpp"
 #include "io/pipeline.hpp"
 #include "mpi/agents_stage.hpp"
@@ -227,23 +228,17 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
 
 // refuses outputs that are not (or would not be) regular files, and an output that is one of the inputs
 void check_run_output(const std::string& path, const RunArgs& args) {
-  namespace fs = std::filesystem;
+  if (!cli::check_existing_output(path, "run file")) return;
   std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (fs::exists(st)) {
-    DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the run file's path");
-    DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
-                                                            "pipe or socket); divcoll never writes over one, even with --force");
-    DIVCOLL_THROW_UNLESS(!fs::equivalent(path, args.config, ec), "--out " << path << " is the config file");
-    if (args.resume || args.force) {
-      const int fd = ::open(path.c_str(), O_RDWR);
-      if (fd < 0) {
-        const int err = errno;
-        throw InputError(msg() << path << ": cannot open it for writing: " << std::strerror(err)
-                               << (err == EPERM ? " (is it immutable? see lsattr)" : ""));
-      }
-      ::close(fd);
+  DIVCOLL_THROW_UNLESS(!std::filesystem::equivalent(path, args.config, ec), "--out " << path << " is the config file");
+  if (args.resume || args.force) {
+    const int fd = ::open(path.c_str(), O_RDWR);
+    if (fd < 0) {
+      const int err = errno;
+      throw InputError(msg() << path << ": cannot open it for writing: " << std::strerror(err)
+                             << (err == EPERM ? " (is it immutable? see lsattr)" : ""));
     }
+    ::close(fd);
   }
 }
 

@@ -132,6 +132,10 @@ int schema(const std::string& check);
 // divcoll envs: the built-in environments
 int envs();
 
+// refuses an existing output that is a directory ("give the <noun>'s path") or not a regular file (a device
+// node: never replaced, even with --force); returns whether the output exists
+bool check_existing_output(const std::string& path, const char* noun);
+
 // refuses to overwrite an existing file unless forced, and always refuses an output that is a directory,
 // not a regular file (a device node: never replaced, even with --force), or one of `inputs`
 void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs = {});

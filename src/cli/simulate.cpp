@@ -21,15 +21,22 @@
 
 namespace divcoll::cli {
 
+bool check_existing_output(const std::string& path, const char* noun) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!fs::exists(st)) return false;
+  DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the " << noun << "'s path");
+  DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
+                                                          "pipe or socket); divcoll never writes over one, even with --force");
+  return true;
+}
+
 void check_output_path(const std::string& path, bool force, const std::vector<std::string>& inputs) {
   namespace fs = std::filesystem;
   DIVCOLL_THROW_UNLESS(!path.empty(), "no output path given");
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (fs::exists(st)) {
-    DIVCOLL_THROW_UNLESS(!fs::is_directory(st), "--out " << path << " is a directory; give the output file's path");
-    DIVCOLL_THROW_UNLESS(fs::is_regular_file(st), "--out " << path << " exists and is not a regular file (a device, "
-                                                            "pipe or socket); divcoll never writes over one, even with --force");
+  if (check_existing_output(path, "output file")) {
+    std::error_code ec;
     for (const std::string& in : inputs)
       DIVCOLL_THROW_UNLESS(!fs::equivalent(path, in, ec), "--out " << path << " is the input file " << in
                                                                     << "; write the output elsewhere");

@@ -54,22 +54,24 @@ void write_holder(int fd, int ranks) {
     throw InputError(msg() << "cannot write the lock file: " << std::strerror(errno));
 }
 
-bool set_lock(int fd, off_t start, off_t len) {
+// a write lock on the bytes [start, start + len) (len 0: to the end)
+struct flock write_lock(off_t start, off_t len) {
   struct flock fl {};
   fl.l_type = F_WRLCK;
   fl.l_whence = SEEK_SET;
   fl.l_start = start;
   fl.l_len = len;
+  return fl;
+}
+
+bool set_lock(int fd, off_t start, off_t len) {
+  struct flock fl = write_lock(start, len);
   return fcntl(fd, F_SETLK, &fl) == 0;
 }
 
 // the pid of a process holding a lock on [start, start + len) (len 0: to the end), or 0 if none
 long lock_holder(int fd, off_t start, off_t len) {
-  struct flock fl {};
-  fl.l_type = F_WRLCK;
-  fl.l_whence = SEEK_SET;
-  fl.l_start = start;
-  fl.l_len = len;
+  struct flock fl = write_lock(start, len);
   if (fcntl(fd, F_GETLK, &fl) != 0 || fl.l_type == F_UNLCK) return 0;
   return fl.l_pid > 0 ? fl.l_pid : -1;
 }
