@@ -2,7 +2,8 @@
 # Installs what divcoll needs from Debian's packages, only what is missing (idempotent). Run as root.
 #   bash jobs/install-deps.sh [--test] [--log FILE]
 # Without --test: the build and runtime packages (README command 1, jobs/quickstart.sh). With --test also what
-# only the tests use (README command 2, jobs/test.sh): a private Slurm with munge, shellcheck, chromium.
+# only the tests use (README command 2, jobs/test.sh): a private Slurm with munge, shellcheck, chromium,
+# gdb (the job-script checks print every rank's stack if a run hangs).
 # apt's output goes to FILE when given (default: the terminal).
 set -euo pipefail
 
@@ -20,6 +21,7 @@ BUILD_RUNTIME=(
 TEST_ONLY=(
   shellcheck slurmctld slurmd slurm-client munge
   chromium
+  gdb
 )
 
 mode=build

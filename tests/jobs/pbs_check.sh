@@ -20,7 +20,24 @@ fail() {
   for f in "$W"/*.log; do
     [ -f "$f" ] && { echo "---- $f (last 30 lines)"; tail -30 "$f"; }
   done
+  for f in "$W"/*.stacks; do
+    [ -f "$f" ] && { echo "---- $f (every divcoll process of a job that outlived its watchdog)"; cat "$f"; }
+  done
   exit 1
+}
+# the stack of every thread of every divcoll process still running (gdb, else the kernel's wait channel):
+# what a hang leaves for whoever reads the failure
+dump_stacks() {
+  local p
+  for p in $(pgrep -x divcoll || true); do
+    grep -qF "$W" "/proc/$p/cmdline" 2> /dev/null || continue  # this check's ranks only
+    echo "== pid $p: $(tr '\0' ' ' < "/proc/$p/cmdline" 2>/dev/null)"
+    if command -v gdb > /dev/null 2>&1; then
+      timeout 30 gdb -p "$p" -batch -ex "thread apply all bt" 2>&1 | grep -E '^(Thread|#)' || true
+    else
+      for t in /proc/"$p"/task/*; do echo "thread ${t##*/}: $(cat "$t/wchan" 2>/dev/null)"; done
+    fi
+  done
 }
 
 echo "== bash -n, shellcheck"
@@ -53,11 +70,18 @@ echo 1002.fake
 EOF
 chmod +x "$W/bin/qsub"
 pbs_job() {  # pbs_job LOG VAR=VALUE...: the PBS script as PBS runs it (from /, a copy-independent path)
-  local log=$1
+  local log=$1 rc=0
   shift
+  # a watchdog: a job still running after 100 s (a tiny run takes seconds) has its ranks' stacks recorded
+  # before `timeout` ends it at 120 s
+  (for _ in $(seq 100); do [ -e "$W/$log.done" ] && exit 0; sleep 1; done; dump_stacks > "$W/$log.stacks") &
+  local dog=$!
   (cd / && env -u SLURM_JOB_ID PATH="$W/bin:$PATH" PBS_NODEFILE="$W/nodefile" PBS_O_WORKDIR="$W" \
     PBS_JOBNAME=divcoll-pbs DIVCOLL_BIN="$D" DIVCOLL_PROFILE=generic-cluster "$@" \
-    timeout 120 bash "$SRC/jobs/pbs/divcoll.pbs") > "$W/$log" 2>&1
+    timeout 120 bash "$SRC/jobs/pbs/divcoll.pbs") > "$W/$log" 2>&1 || rc=$?
+  touch "$W/$log.done"
+  wait "$dog" || true
+  return "$rc"
 }
 complete_run_file() {  # every stage complete, an end time, no checkpoint left
   local g
