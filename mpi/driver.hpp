@@ -7,7 +7,8 @@
 // Commit: the plan's state and the counter are written together and then checkpointed (mpi/checkpoint.hpp),
 // one step; --resume starts from the last checkpoint, never from what a killed job left in the run file
 // after it, so a kill between the state and the counter (or anywhere else) resumes a consistent pair.
-// The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> makes every rank flush the run
+// The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> (or <group>@<counter>:<rounds done>,
+// where plans share a group) makes every rank flush the run
 // file and exit (code 86) right between writing that commit's state and its counter (tests/mpi/commit_kill_test.sh).
 #pragma once
 
