@@ -357,12 +357,12 @@ class AdversityPlan final : public Plan {
 // replicate; Table S1 (finish()) over every environment's counts, restored after a resume
 class FamiliarityPlan final : public Plan {
  public:
-  // master: deploy's hidden states of the two types (E × R × NP × K × 32) and K, read when a round is left
-  using Hidden = std::function<std::array<std::vector<float>, 2>(int& K)>;
-  FamiliarityPlan(const io::RunConfig& cfg, std::vector<std::string> novel, Hidden hidden)
-      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)),
-        hidden_in_(std::move(hidden)),
-        EN_(static_cast<int>(novel_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
+  // hidden: deploy's hidden states of the two types (E × R × NP × K × 32; none when every round is done)
+  FamiliarityPlan(const io::RunConfig& cfg, std::vector<std::string> novel, std::array<std::vector<float>, 2> hidden,
+                  int K)
+      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)), K_(K),
+        hidden_(std::move(hidden)), EN_(static_cast<int>(novel_.size())), NP_(cfg.deploy.pairs),
+        R_(cfg.connectors.replicates),
         e_flat_(static_cast<int>(std::find(envs_.begin(), envs_.end(), "flat") - envs_.begin())) {}
   Info info() const override {
     return {"analysis familiarity", "analysis", "familiarity_envs_done", "environment", "fits", 1};
@@ -385,7 +385,6 @@ class FamiliarityPlan final : public Plan {
       for (size_t k = 0; k < c.size(); ++k) counts_[t][k] = static_cast<int64_t>(c[k]);
       for (size_t k = 0; k < m.size(); ++k) ns_[t][k] = static_cast<int64_t>(m[k]);
     }
-    if (done < EN_) hidden_ = hidden_in_(K_);
   }
   std::vector<std::string> items(int k) override {
     const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
@@ -497,10 +496,9 @@ class FamiliarityPlan final : public Plan {
   const io::RunConfig::Analysis& A_;
   const std::vector<std::string>& envs_;
   const std::vector<std::string> novel_;
-  const Hidden hidden_in_;
+  const int K_;                                     // hidden states per episode
+  const std::array<std::vector<float>, 2> hidden_;  // [type] deploy's hidden states
   const int EN_, NP_, R_, e_flat_;
-  int K_ = 0;
-  std::array<std::vector<float>, 2> hidden_;  // [type] deploy's hidden states (master)
   std::vector<FitDone> done_;
   std::array<std::vector<int64_t>, 2> counts_, ns_;  // [type] novel E × R × 6, × 2
 };
@@ -509,8 +507,6 @@ class FamiliarityPlan final : public Plan {
 
 void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                         const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
   const auto& D = cfg.deploy;
   const std::vector<std::string>& envs = D.environments;
   const int NP = D.pairs, R = cfg.connectors.replicates;
@@ -548,33 +544,35 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   for (const char* g : {"analysis/adversity", "analysis/familiarity"})
     if (!file.has(g)) file.create_group(g);
 
-  // adversity: deploy's results, to check the re-simulated episodes against (master)
+  // adversity: deploy's results, to check the re-simulated episodes against (the master checks; every rank
+  // reads, as with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5
+  // metadata caches)
   AdversityPlan::Deployed deployed;
-  if (rank == 0) {
-    deployed.alone = file.read<double>("deploy/agents/travel_u");
-    deployed.alone_status = file.read<uint8_t>("deploy/agents/status");
-    deployed.pairs = file.read<double>("deploy/collectives/travel_u");
-    deployed.pairs_status = file.read<uint8_t>("deploy/collectives/status");
-  }
+  deployed.alone = file.read<double>("deploy/agents/travel_u");
+  deployed.alone_status = file.read<uint8_t>("deploy/agents/status");
+  deployed.pairs = file.read<double>("deploy/collectives/travel_u");
+  deployed.pairs_status = file.read<uint8_t>("deploy/collectives/status");
   AdversityPlan adversity(cfg, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
                           std::move(deployed));
   drive(comm, cfg, file, adversity, checkpoint);
 
-  // familiarity: flat's hidden states against each novel environment's
+  // familiarity: flat's hidden states against each novel environment's (every rank reads them while
+  // rounds are left; the master's plan uses them)
   if (std::find(envs.begin(), envs.end(), "flat") != envs.end() && !novel.empty()) {
-    auto hidden = [&](int& K) {
-      std::array<std::vector<float>, 2> h;
-      const hsize_t hE = envs.size(), hR = R, hN = NP;
+    std::array<std::vector<float>, 2> hidden;
+    int K = 0;
+    const int64_t fam_done = stage.has_attribute("familiarity_envs_done") ? stage.read_int("familiarity_envs_done") : 0;
+    if (fam_done < static_cast<int64_t>(novel.size()))
       for (int t = 0; t < 2; ++t) {
-        Dims d;
-        h[t] = file.read<float>("deploy/hidden/" + kTypes[t] + "/states", &d);
-        DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == hE && d[1] == hR && d[2] == hN && d[4] == kHidden,
-                             file.file() << ": deploy/hidden/" << kTypes[t] << "/states has an unexpected shape");
+        const std::string p = "deploy/hidden/" + kTypes[t] + "/states";
+        const Dims d = file.dims(p);
+        DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == envs.size() && d[1] == static_cast<hsize_t>(R) &&
+                                 d[2] == static_cast<hsize_t>(NP) && d[4] == kHidden,
+                             file.file() << ": " << p << " has an unexpected shape");
+        hidden[t] = file.read<float>(p);
         K = static_cast<int>(d[3]);
       }
-      return h;
-    };
-    FamiliarityPlan familiarity(cfg, novel, hidden);
+    FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K);
     drive(comm, cfg, file, familiarity, checkpoint);
   }
   stage.write_string("status", "complete");

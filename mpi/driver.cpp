@@ -112,17 +112,18 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const int R = plan.rounds(), passes = info.passes;
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
-  // where to start: the state committed with the counter (the master's plan holds it)
-  if (rank == 0) {
-    StoredState stored;
-    if (done > 0) {
-      for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
-      for (const auto& [name, value] : plan.state_attributes()) {
-        const auto [g, a] = attribute_at(info.group, name);
-        if (file.has(g) && file.group(g).has_attribute(a))
-          stored[name] = {static_cast<double>(file.group(g).read_int(a))};
-      }
+  // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
+  // alone unbalances the ranks' HDF5 metadata caches); the master's plan holds it
+  StoredState stored;
+  if (done > 0) {
+    for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
+    for (const auto& [name, value] : plan.state_attributes()) {
+      const auto [g, a] = attribute_at(info.group, name);
+      if (file.has(g) && file.group(g).has_attribute(a))
+        stored[name] = {static_cast<double>(file.group(g).read_int(a))};
     }
+  }
+  if (rank == 0) {
     plan.start(done, stored);
     if (done >= R)
       std::printf("%s: all %d %ss were already done\n", label.c_str(), R, info.round_word.c_str());

@@ -67,8 +67,8 @@ class Plan {
   // the datasets of its state (start() gets them back after a resume); rows written by end_round() count
   // as committed with the round
   virtual std::vector<std::string> state_paths() const { return {}; }
-  // master: integer attributes of its state (names as Attribute's), committed with the counter; start()
-  // gets their committed values back under their names, one value each
+  // integer attributes of its state (names as Attribute's; every rank: the names, the master: the values),
+  // committed with the counter; start() gets their committed values back under their names, one value each
   virtual std::vector<std::pair<std::string, int64_t>> state_attributes() const { return {}; }
   // master: from nothing (done == 0) or from the state committed with `done` rounds
   virtual void start(int done, const StoredState& stored) = 0;
