@@ -53,7 +53,4 @@ namespace divcoll::mpi {
 
 inline constexpr uint64_t kAnalysisStage = io::stage_stream("analysis");
 
-void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                        const std::function<void()>& checkpoint);
-
 }  // namespace divcoll::mpi
