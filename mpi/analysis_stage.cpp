@@ -546,7 +546,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
 
   // adversity: deploy's results, to check the re-simulated episodes against (the master checks; every rank
   // reads, as with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5
-  // metadata caches)
+  // metadata caches, io/h5.hpp)
   AdversityPlan::Deployed deployed;
   deployed.alone = file.read<double>("deploy/agents/travel_u");
   deployed.alone_status = file.read<uint8_t>("deploy/agents/status");

@@ -113,7 +113,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
   // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
-  // alone unbalances the ranks' HDF5 metadata caches); the master's plan holds it
+  // alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp); the master's plan holds it
   StoredState stored;
   if (done > 0) {
     for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
