@@ -199,8 +199,9 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     if (file.has(gen_name(G, g))) H5Ldelete(file.id(), gen_name(G, g).c_str(), H5P_DEFAULT);
   if (file.has(G + "/final") && done < A.generations + 1) H5Ldelete(file.id(), (G + "/final").c_str(), H5P_DEFAULT);
   // the master's population: the survivors of the last committed generation
+  // (read on every rank: a read made by one rank alone unbalances the ranks' HDF5 metadata caches, io/h5.hpp)
   std::vector<evo::Individual> population;
-  if (done > 0 && rank == 0) {
+  if (done > 0) {
     std::vector<uint8_t> survived;
     const auto pool = io::read_pool(file, gen_name(G, static_cast<int>(done) - 1), &survived);
     for (size_t i = 0; i < pool.size(); ++i)
@@ -209,6 +210,7 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
                          file.file() << ": generation " << done - 1 << " has " << population.size()
                                      << " survivors, not agents.population = " << P
                                      << " (was the run started with another config?)");
+    if (rank != 0) population.clear();
   }
   AgentsPlan plan(cfg, spec, std::move(population));
   drive(comm, cfg, file, plan, checkpoint);

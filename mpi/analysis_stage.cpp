@@ -157,15 +157,13 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   io::h5::Node adv = file.group("analysis/adversity");
   if (!adv.has_attribute("deploy_mismatches")) adv.write_int("deploy_mismatches", 0);
 
-  // deploy's results, to check the re-simulated episodes against (rank 0)
-  std::vector<double> deploy_alone, deploy_pairs;
-  std::vector<uint8_t> deploy_alone_status, deploy_pairs_status;
-  if (rank == 0) {
-    deploy_alone = file.read<double>("deploy/agents/travel_u");
-    deploy_alone_status = file.read<uint8_t>("deploy/agents/status");
-    deploy_pairs = file.read<double>("deploy/collectives/travel_u");
-    deploy_pairs_status = file.read<uint8_t>("deploy/collectives/status");
-  }
+  // deploy's results, to check the re-simulated episodes against (the master checks; every rank reads, as
+  // with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5 metadata
+  // caches, io/h5.hpp)
+  const std::vector<double> deploy_alone = file.read<double>("deploy/agents/travel_u");
+  const std::vector<uint8_t> deploy_alone_status = file.read<uint8_t>("deploy/agents/status");
+  const std::vector<double> deploy_pairs = file.read<double>("deploy/collectives/travel_u");
+  const std::vector<uint8_t> deploy_pairs_status = file.read<uint8_t>("deploy/collectives/status");
 
   const auto t_stage = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count(); };
@@ -222,7 +220,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     if (rank == 0)
       for (int32_t a = 0; a < pop; ++a) items.push_back(pack(a));
     const FarmResult fa = farm(comm, items, alone);
-    long mismatches = 0;
+    long mismatches = adv.read_int("deploy_mismatches");  // every rank reads
     std::vector<double> alone_bl(pop, kNaN);
     if (rank == 0) {
       for (int a = 0; a < pop; ++a) {
@@ -262,7 +260,6 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
             for (int slot = 0; slot < 2; ++slot)
               if (std::isfinite(d.dtw[slot])) sum[t][slot == w ? 0 : 1] += d.dtw[slot], cnt[t][slot == w ? 0 : 1] += 1;
           }
-      mismatches += adv.read_int("deploy_mismatches");
     }
     for (int t = 0; t < 2; ++t) {
       file.write_rows<double>("analysis/adversity/" + kTypes[t] + "/dtw", {hE, hR, hN, 2}, rows, dtw[t]);
@@ -294,7 +291,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     if (rank == 0 && fam_done > 0) std::printf("analysis: resuming familiarity after %d environment(s)\n", fam_done);
     std::array<std::vector<float>, 2> hidden;
     int K = 0;
-    if (rank == 0 && fam_done < EN)
+    if (fam_done < EN)  // every rank reads
       for (int t = 0; t < 2; ++t) {
         Dims d;
         hidden[t] = file.read<float>("deploy/hidden/" + kTypes[t] + "/states", &d);
@@ -385,11 +382,23 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
 
   // ---- statistics (§8.3), from the datasets written above -----------------------------------------------
   std::vector<double> rep_means, summary, welch, table;
+  // every rank reads; the master computes
+  std::array<std::vector<double>, 2> dtw_all;
+  std::array<std::vector<uint8_t>, 2> ws_all;
+  std::array<std::vector<int64_t>, 2> counts, ns;
+  for (int t = 0; t < 2; ++t) {
+    dtw_all[t] = file.read<double>("analysis/adversity/" + kTypes[t] + "/dtw");
+    ws_all[t] = file.read<uint8_t>("analysis/adversity/" + kTypes[t] + "/worse_slot");
+    if (EN > 0 && flat_it != envs.end()) {
+      counts[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/counts");
+      ns[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/n_states");
+    }
+  }
   if (rank == 0) {
     std::array<std::array<std::vector<double>, 2>, 2> per_rep;  // [type][worse/better] over replicates
     for (int t = 0; t < 2; ++t) {
-      const std::vector<double> dtw = file.read<double>("analysis/adversity/" + kTypes[t] + "/dtw");
-      const std::vector<uint8_t> ws = file.read<uint8_t>("analysis/adversity/" + kTypes[t] + "/worse_slot");
+      const std::vector<double>& dtw = dtw_all[t];
+      const std::vector<uint8_t>& ws = ws_all[t];
       for (int w = 0; w < 2; ++w)
         for (int r = 0; r < R; ++r) {
           double s = 0, n = 0;
@@ -415,11 +424,6 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
       welch.insert(welch.end(), {tr.statistic, tr.df, tr.p});
     }
     if (EN > 0 && flat_it != envs.end()) {
-      std::array<std::vector<int64_t>, 2> counts, ns;
-      for (int t = 0; t < 2; ++t) {
-        counts[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/counts");
-        ns[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/n_states");
-      }
       for (int k = 0; k < EN; ++k)
         for (int c = 0; c < 3; ++c) {
           std::array<std::vector<double>, 2> v;  // per type, over replicates with a fit

@@ -56,6 +56,7 @@ int bcast_int(MPI_Comm comm, int v) {
 }  // namespace
 
 void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) {
+  check_symmetric_io(comm, "a checkpoint");
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
   // every rank's writes are on disk before rank 0 copies; the other ranks wait for the copy sleeping
   MPI_Request req;

@@ -8,19 +8,15 @@
 
 namespace divcoll::mpi {
 
-std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file, const std::string& group) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
+std::vector<collective::Agent> load_population(MPI_Comm, const io::h5::Node& file, const std::string& group) {
   // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
   // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
   const std::string at = io::anchors_path(group);
   const bool stored = file.has(at);
+  // every rank reads (a read made by one rank alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp)
   std::vector<collective::Agent> agents;
-  if (rank == 0) {
-    for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
-    if (stored) io::read_anchors(file, at, agents);
-  }
-  agents = broadcast(comm, agents);
+  for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
+  if (stored) io::read_anchors(file, at, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
   if (!stored)
     for (auto& a : agents) a.anchors = collective::compute_anchors(a);

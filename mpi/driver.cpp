@@ -91,10 +91,12 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
   // where to start: the state committed with the counter (the master's plan holds it)
+  // every rank reads the state (a read made by one rank alone unbalances the ranks' HDF5 metadata caches:
+  // io/h5.hpp); the master's plan holds it
+  StoredState stored;
+  if (done > 0)
+    for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
   if (rank == 0) {
-    StoredState stored;
-    if (done > 0)
-      for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
     plan.start(done, stored);
     if (done >= R)
       std::printf("%s: all %d %ss were already done\n", label.c_str(), R, info.round_word.c_str());

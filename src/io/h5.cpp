@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -194,6 +195,52 @@ std::string Node::where(const std::string& child) const {
   return p.empty() ? file_ : file_ + ": " + p;
 }
 
+// ---- the journal of calls on MPI-IO files (DIVCOLL_DEBUG_SYMMETRIC_IO=1) -------------------------
+
+namespace {
+// the paths of the files this process has open with MPI-IO (H5Fget_access_plist, which would tell, is itself
+// collective for such a file)
+std::vector<std::string>& mpio_files() {
+  static std::vector<std::string> v;
+  return v;
+}
+void set_mpio(const std::string& path, bool on) {
+  auto& v = mpio_files();
+  const auto it = std::find(v.begin(), v.end(), path);
+  if (on && it == v.end()) v.push_back(path);
+  if (!on && it != v.end()) v.erase(it);
+}
+}  // namespace
+
+namespace {
+bool& journal_flag() {
+  static bool on = [] {
+    const char* e = std::getenv("DIVCOLL_DEBUG_SYMMETRIC_IO");
+    return e != nullptr && std::string(e) == "1";
+  }();
+  return on;
+}
+}  // namespace
+
+bool journal_enabled() { return journal_flag(); }
+void enable_journal(bool on) { journal_flag() = on; }
+
+Journal& journal() {
+  static Journal j;
+  return j;
+}
+
+void Node::note(const char* op, const std::string& path) const {
+  if (!journal_enabled()) return;
+  const auto& files = mpio_files();
+  if (std::find(files.begin(), files.end(), file_) == files.end()) return;
+  const std::string line = std::string(op) + " " + (name_ == "/" ? "" : name_) + (path.empty() ? "" : "/" + path);
+  Journal& j = journal();
+  ++j.calls;
+  for (unsigned char c : line + "\n") j.digest = (j.digest ^ c) * 1099511628211ull;
+  if (j.since_check.size() < Journal::kKeep) j.since_check.push_back(line);
+}
+
 namespace {
 std::string attr_label(const std::string& node_name, const std::string& attr) {
   return "attribute '" + attr + "'" + (node_name == "/" ? "" : " of " + node_name.substr(1));
@@ -203,6 +250,7 @@ std::string attr_label(const std::string& node_name, const std::string& attr) {
 // ---- Node: links and groups --------------------------------------------------------------------
 
 bool Node::has(const std::string& path) const {
+  note("has", path);
   // check every prefix: H5Lexists fails (rather than returning false) if a parent is missing
   size_t pos = 0;
   while (true) {
@@ -222,12 +270,14 @@ bool Node::has(const std::string& path) const {
 }
 
 bool Node::has_attribute(const std::string& attr) const {
+  note("has_attribute", attr);
   const htri_t e = H5Aexists(id(), attr.c_str());
   if (e < 0) fail(file_, "cannot look up " + attr_label(name_, attr));
   return e > 0;
 }
 
 Node Node::group(const std::string& path) const {
+  note("group", path);
   if (!has(path)) throw InputError(file_ + ": missing group " + path_of(path));
   Handle g(H5Gopen2(id(), path.c_str(), H5P_DEFAULT), H5Gclose);
   if (!g.valid()) fail(where(path) + " is not a group");
@@ -235,6 +285,7 @@ Node Node::group(const std::string& path) const {
 }
 
 Node Node::create_group(const std::string& path) const {
+  note("create_group", path);
   if (has(path)) throw InputError(where(path) + ": already exists");
   Handle lcpl = intermediate_lcpl(where(path));
   Handle g(H5Gcreate2(id(), path.c_str(), lcpl.id(), H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
@@ -276,11 +327,13 @@ Handle open_scalar_attribute(hid_t obj, const std::string& attr, const std::stri
 }  // namespace
 
 void Node::write_double(const std::string& attr, double v) const {
+  note("write_double", attr);
   write_scalar_attribute(id(), attr, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v,
                          file_ + ": " + attr_label(name_, attr));
 }
 
 void Node::write_int(const std::string& attr, int64_t v) const {
+  note("write_int", attr);
   write_scalar_attribute(id(), attr, H5T_STD_I64LE, H5T_NATIVE_INT64, &v,
                          file_ + ": " + attr_label(name_, attr));
 }
@@ -297,10 +350,12 @@ void write_string_attribute(hid_t obj, const std::string& attr, const std::strin
 }  // namespace
 
 void Node::write_string(const std::string& attr, const std::string& v) const {
+  note("write_string", attr);
   write_string_attribute(id(), attr, v, file_ + ": " + attr_label(name_, attr));
 }
 
 double Node::read_double(const std::string& attr) const {
+  note("read_double", attr);
   const std::string w = file_ + ": " + attr_label(name_, attr);
   Handle ftype;
   Handle a = open_scalar_attribute(id(), attr, w, ftype);
@@ -313,6 +368,7 @@ double Node::read_double(const std::string& attr) const {
 }
 
 int64_t Node::read_int(const std::string& attr) const {
+  note("read_int", attr);
   const std::string w = file_ + ": " + attr_label(name_, attr);
   Handle ftype;
   Handle a = open_scalar_attribute(id(), attr, w, ftype);
@@ -324,6 +380,7 @@ int64_t Node::read_int(const std::string& attr) const {
 }
 
 std::string Node::read_string(const std::string& attr) const {
+  note("read_string", attr);
   const std::string w = file_ + ": " + attr_label(name_, attr);
   Handle ftype;
   Handle a = open_scalar_attribute(id(), attr, w, ftype);
@@ -366,6 +423,7 @@ void Node::annotate(hid_t dataset, const std::string& path, const char* dtype, c
 
 template <class T>
 void Node::write(const std::string& path, const std::vector<T>& data, const Dims& dims) const {
+  note("write", path);
   static_assert(is_element<T>::value, "h5 datasets hold double, float, int32, int64 or uint8");
   const std::string w = where(path);
   if (product(dims) != data.size())
@@ -392,6 +450,7 @@ void Node::write(const std::string& path, const std::vector<T>& data, const Dims
 template <class T>
 void Node::write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows,
                       const std::vector<T>& packed) const {
+  note("write_rows", path);
   const std::string w = where(path);
   if (dims.empty()) throw InputError(w + ": write_rows needs at least one dimension");
   const hsize_t row_size = product(dims) / std::max<hsize_t>(dims[0], 1);
@@ -448,6 +507,7 @@ void Node::write_rows(const std::string& path, const Dims& dims, const std::vect
 }
 
 Dims Node::dims(const std::string& path) const {
+  note("dims", path);
   const std::string w = where(path);
   if (!has(path)) throw InputError(file_ + ": missing dataset " + path_of(path));
   Handle d(H5Dopen2(id(), path.c_str(), H5P_DEFAULT), H5Dclose);
@@ -459,6 +519,7 @@ Dims Node::dims(const std::string& path) const {
 
 template <class T>
 std::vector<T> Node::read(const std::string& path, Dims* dims_out) const {
+  note("read", path);
   static_assert(is_element<T>::value, "h5 datasets hold double, float, int32, int64 or uint8");
   const std::string w = where(path);
   if (!has(path)) throw InputError(file_ + ": missing dataset " + path_of(path));
@@ -533,6 +594,7 @@ File File::create(const std::string& path, bool overwrite, hid_t fapl) {
   if (!f.valid()) fail(path, "cannot create the HDF5 file");
   File out(std::move(f), path, "/");
   out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  if (out.mpio_) set_mpio(path, true);
   return out;
 }
 
@@ -561,10 +623,12 @@ File File::open(const std::string& path, bool writable, hid_t fapl) {
   if (!f.valid()) fail(path + " is not a readable HDF5 file (truncated or damaged?)");
   File out(std::move(f), path, "/");
   out.mpio_ = fapl != H5P_DEFAULT && H5Pget_driver(fapl) == H5FD_MPIO;
+  if (out.mpio_) set_mpio(path, true);
   return out;
 }
 
 File::~File() {
+  if (mpio_ && handle_.valid()) set_mpio(file_, false);
   // (H5Fget_access_plist would duplicate the communicator: collective, so it cannot be asked here)
   if (std::uncaught_exceptions() > 0 && mpio_ && handle_.valid()) {
     (void)handle_.release();
@@ -575,6 +639,7 @@ File::~File() {
 
 void File::close() {
   if (!handle_.valid()) return;
+  if (mpio_) set_mpio(file_, false);
   if (H5Fflush(handle_.id(), H5F_SCOPE_LOCAL) < 0) fail(file_, "cannot flush the file");
   if (!handle_.reset()) fail(file_, "cannot close the file");
 }

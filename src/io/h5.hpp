@@ -69,6 +69,21 @@ struct is_element<uint8_t> : std::true_type {};
 template <>
 struct is_element<float> : std::true_type {};
 
+// A check for parallel runs: every rank must make the same HDF5 calls on a file opened with MPI-IO, reads
+// included. (A collective call, such as writing an attribute, that misses the metadata cache on some ranks
+// only has rank 0 read the entry and broadcast it: caches made unequal by one rank's own reads hang the run
+// or hand a rank another entry's bytes.) With DIVCOLL_DEBUG_SYMMETRIC_IO=1 in the environment every Node
+// call on such a file is recorded in this process's journal; mpi::check_symmetric_io compares the ranks'.
+struct Journal {
+  uint64_t calls = 0;                   // calls since the process started
+  uint64_t digest = 0;                  // FNV-1a of every call's kind and path, in order
+  std::vector<std::string> since_check;  // the calls since the last comparison (at most kKeep)
+  static constexpr size_t kKeep = 400;
+};
+bool journal_enabled();
+void enable_journal(bool on);  // for tests: the environment variable's setting, overridden
+Journal& journal();
+
 // a file or a group: the object plus the names its error messages use
 class Node {
  public:
@@ -127,6 +142,8 @@ class Node {
   // (io/run_file.hpp; nothing in other files)
   void annotate(hid_t dataset, const std::string& path, const char* dtype, const Dims& dims) const;
   static std::string absolute(const std::string& p);
+  // records a call on this node in the journal (when enabled and the file is open with MPI-IO)
+  void note(const char* op, const std::string& path = "") const;
 };
 
 class File : public Node {

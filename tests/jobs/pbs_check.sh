@@ -12,6 +12,9 @@
 set -euo pipefail
 D=$1 SRC=$2
 OVR=(agents.population=10 agents.generations=12 agents.epochs=5 agents.episode_steps=1000)
+# every rank must make the same HDF5 calls on the run file, reads included: checked at every checkpoint
+# (io/h5.hpp Journal; a mismatch stops the run with each rank's calls)
+export DIVCOLL_DEBUG_SYMMETRIC_IO=1
 t_start=$SECONDS
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT

@@ -10,6 +10,9 @@
 set -euo pipefail
 D=$1 SRC=$2
 source "$SRC/jobs/mpi-env.sh"
+# every rank must make the same HDF5 calls on the run file, reads included: checked at every checkpoint
+# (io/h5.hpp Journal; a mismatch stops the run with each rank's calls)
+export DIVCOLL_DEBUG_SYMMETRIC_IO=1
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 CFG=$SRC/configs/tiny.toml

@@ -8,6 +8,9 @@ D=$1 SRC=$2 CMD=$3 CFG=$4
 shift 4
 OVR=("$@")
 source "$SRC/jobs/mpi-env.sh"
+# every rank must make the same HDF5 calls on the run file, reads included: checked at every checkpoint
+# (io/h5.hpp Journal; a mismatch stops the run with each rank's calls)
+export DIVCOLL_DEBUG_SYMMETRIC_IO=1
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 
