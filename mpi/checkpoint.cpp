@@ -56,7 +56,6 @@ int bcast_int(MPI_Comm comm, int v) {
 }  // namespace
 
 void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) {
-  check_symmetric_io(comm, "a checkpoint");
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
   // every rank's writes are on disk before rank 0 copies; the other ranks wait for the copy sleeping
   MPI_Request req;
@@ -89,6 +88,7 @@ Checkpointer::Checkpointer(MPI_Comm comm, io::h5::File& file, std::string run_pa
 void Checkpointer::at(bool force) {
   int rank = 0;
   MPI_Comm_rank(comm_, &rank);
+  check_symmetric_io(comm_, "a checkpoint");  // at every commit, whether it copies or not
   // one collective decides for every rank: any rank's stop request, and rank 0's clock
   int v[2] = {stop_signal(), 0};
   if (rank == 0)
