@@ -46,7 +46,5 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
 
 // runs (or resumes) the stage on `comm`; rank 0 prints progress. Every rank calls it. `checkpoint` is
 // called (collectively) after every output.checkpoint_every generations and at the end of the stage.
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint);
 
 }  // namespace divcoll::mpi

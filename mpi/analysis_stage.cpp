@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -17,8 +16,8 @@
 #include "io/run_read.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
+#include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
-#include "mpi/scheduler.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -103,25 +102,421 @@ std::vector<double> finite(const std::vector<double>& v) {
   return out;
 }
 
+// the adversity analysis (§8.1) as a plan: one round per environment, of two passes: every agent alone
+// (its behaviour kept), then every pair of the two types (each agent's DTW against its alone behaviour,
+// which every rank gets as the pass's input). Its rows stay its state: the statistics (finish()) are
+// taken over every environment's rows, restored after a resume
+class AdversityPlan final : public Plan {
+ public:
+  // deploy's travel and status, agents alone (E × pop) and collectives (E × T × R × NP), to check the
+  // re-simulated episodes against (master)
+  struct Deployed {
+    std::vector<double> alone, pairs;
+    std::vector<uint8_t> alone_status, pairs_status;
+  };
+  AdversityPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                std::array<std::vector<std::vector<double>>, 2> weights,
+                std::array<std::vector<std::pair<int, int>>, 2> pairs,
+                std::array<int, 2> type_index, int deploy_types, std::vector<std::string> novel, Deployed deployed)
+      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), agents_(agents), weights_(std::move(weights)),
+        pairs_(std::move(pairs)), type_index_(type_index), novel_(std::move(novel)), deployed_(std::move(deployed)),
+        E_(static_cast<int>(envs_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
+        T_(deploy_types), pop_(static_cast<int>(agents.size())), stiffness_(io::strength_stiffness(cfg, "weak")) {
+    rec_.steps = cfg.deploy.episode_steps;
+    rec_.record = true;
+    const int frames = cfg.deploy.episode_steps / A_.dtw_every + 1;
+    dopt_.band = static_cast<int>(std::ceil(A_.dtw_band * frames));
+    dopt_.cost = A_.dtw_cost == "squared_sqrt" ? analysis::DtwCost::squared_sqrt : analysis::DtwCost::euclidean;
+    dopt_.step = A_.dtw_step == "symmetric2" ? analysis::DtwStep::symmetric2 : analysis::DtwStep::symmetric1;
+  }
+  Info info() const override {
+    Info i{"analysis adversity", "analysis", "dtw_envs_done", "environment", "episodes", 1};
+    i.passes = 2;
+    return i;
+  }
+  int rounds() const override { return E_; }
+  std::vector<Attribute> attributes() const override {
+    return {{"types", kTypes[0] + "," + kTypes[1]},
+            {"environments", join(envs_)},
+            {"novel_environments", join(novel_)}};
+  }
+  std::vector<std::string> state_paths() const override {
+    std::vector<std::string> p;
+    for (const std::string& t : kTypes)
+      for (const char* d : {"/dtw", "/worse_slot"}) p.push_back("analysis/adversity/" + t + d);
+    return p;
+  }
+  std::vector<std::pair<std::string, int64_t>> state_attributes() const override {
+    return {{"adversity/deploy_mismatches", mismatches_}};
+  }
+  void start(int done, const StoredState& s) override {
+    const size_t n = static_cast<size_t>(E_) * R_ * NP_;
+    for (int t = 0; t < 2; ++t) {
+      dtw_[t].assign(2 * n, kNaN);
+      worse_[t].assign(n, 0);
+      if (done == 0) continue;
+      const std::vector<double>& d = s.at("analysis/adversity/" + kTypes[t] + "/dtw");
+      const std::vector<double>& w = s.at("analysis/adversity/" + kTypes[t] + "/worse_slot");
+      std::copy(d.begin(), d.end(), dtw_[t].begin());
+      for (size_t k = 0; k < n; ++k) worse_[t][k] = static_cast<uint8_t>(w[k]);
+    }
+    const auto m = s.find("adversity/deploy_mismatches");
+    mismatches_ = m == s.end() ? 0 : static_cast<int64_t>(m->second[0]);
+    behaviour_.assign(pop_, {});
+  }
+  // pass 1: every agent's alone behaviour, for the pairs' DTW
+  std::string round_input(int step) override { return step % 2 == 1 ? pack(behaviour_) : std::string(); }
+  void take_input(int step, const std::string& input) override {
+    env_ = step / 2, pass_ = step % 2;
+    if (step % 2 == 1) behaviour_ = unpack<std::vector<std::vector<double>>>(input);
+  }
+  std::vector<std::string> items(int step) override {
+    std::vector<std::string> items;
+    if (step % 2 == 0) {
+      for (int32_t a = 0; a < pop_; ++a) items.push_back(pack(a));
+      alone_.assign(pop_, {});
+    } else {
+      for (int t = 0; t < 2; ++t)
+        for (int r = 0; r < R_; ++r)
+          for (int q = 0; q < NP_; ++q) items.push_back(pack(PairTask{t, r, pairs_[t][q].first, pairs_[t][q].second}));
+      done_.assign(items.size(), {});
+    }
+    return items;
+  }
+  std::string compute(const std::string& bytes) override { return pass_ == 0 ? alone(bytes) : pair(bytes); }
+  void reduce(int step, int64_t i, const std::string& bytes) override {
+    if (step % 2 == 0) alone_[i] = unpack<AloneDone>(bytes);
+    else done_[i] = unpack<PairDone>(bytes);
+  }
+  Records end_round(int step) override {
+    const int ei = step / 2;
+    if (step % 2 == 0) {
+      alone_bl_.assign(pop_, kNaN);
+      round_mismatches_ = 0;
+      for (int a = 0; a < pop_; ++a) {
+        AloneDone& d = alone_[a];
+        const size_t k = static_cast<size_t>(ei) * pop_ + a;
+        if (!same_bits(d.travel_u, deployed_.alone[k]) || d.status != deployed_.alone_status[k]) ++round_mismatches_;
+        alone_bl_[a] = d.status == 0 ? d.travel_bl : kNaN;
+        behaviour_[a] = std::move(d.behaviour);
+      }
+      return {};
+    }
+    const hsize_t hE = E_, hR = R_, hN = NP_;
+    const size_t at = static_cast<size_t>(ei) * R_ * NP_;
+    Records out;
+    sum_ = {}, cnt_ = {};
+    for (int t = 0; t < 2; ++t) {
+      std::vector<double> dtw;
+      std::vector<uint8_t> worse;
+      for (int r = 0; r < R_; ++r)
+        for (int q = 0; q < NP_; ++q) {
+          const PairDone& d = done_[(static_cast<size_t>(t) * R_ + r) * NP_ + q];
+          const size_t k = ((static_cast<size_t>(ei) * T_ + type_index_[t]) * R_ + r) * NP_ + q;
+          if (!same_bits(d.travel_u, deployed_.pairs[k]) || d.status != deployed_.pairs_status[k]) ++round_mismatches_;
+          dtw.push_back(d.dtw[0]);
+          dtw.push_back(d.dtw[1]);
+          // the worse agent travelled less alone; a tie (clones) makes the posterior one the worse
+          const uint8_t w = alone_bl_[pairs_[t][q].second] < alone_bl_[pairs_[t][q].first] ? 1 : 0;
+          worse.push_back(w);
+          for (int slot = 0; slot < 2; ++slot)
+            if (std::isfinite(d.dtw[slot])) sum_[t][slot == w ? 0 : 1] += d.dtw[slot], cnt_[t][slot == w ? 0 : 1] += 1;
+        }
+      std::copy(dtw.begin(), dtw.end(), dtw_[t].begin() + 2 * at);
+      std::copy(worse.begin(), worse.end(), worse_[t].begin() + at);
+      const std::string g = "analysis/adversity/" + kTypes[t];
+      out.push_back({g + "/dtw", {hE, hR, hN, 2}, {ei}, std::move(dtw)});
+      out.push_back({g + "/worse_slot", {hE, hR, hN}, {ei}, std::move(worse)});
+    }
+    mismatches_ += round_mismatches_;
+    return out;
+  }
+  std::string summary(int ei) const override {
+    char b[256];
+    std::snprintf(b, sizeof b, "%s: DTW per step worse/better:", envs_[ei].c_str());
+    std::string s = b;
+    for (int t = 0; t < 2; ++t) {
+      std::snprintf(b, sizeof b, " %s %.4f/%.4f", kTypes[t].c_str(), sum_[t][0] / cnt_[t][0], sum_[t][1] / cnt_[t][1]);
+      s += b;
+    }
+    s += " u";
+    if (round_mismatches_ > 0)
+      s += "; WARNING " + std::to_string(round_mismatches_) + " re-simulated episode(s) differ from deploy's travel";
+    return s;
+  }
+  // the statistics (§8.3) over every environment's rows
+  Records finish() override {
+    std::array<std::array<std::vector<double>, 2>, 2> per_rep;  // [type][worse/better] over replicates
+    for (int t = 0; t < 2; ++t)
+      for (int w = 0; w < 2; ++w)
+        for (int r = 0; r < R_; ++r) {
+          double s = 0, n = 0;
+          for (int e = 0; e < E_; ++e)
+            for (int q = 0; q < NP_; ++q) {
+              const size_t k = (static_cast<size_t>(e) * R_ + r) * NP_ + q;
+              const double v = dtw_[t][2 * k + (w == 0 ? worse_[t][k] : 1 - worse_[t][k])];
+              if (std::isfinite(v)) s += v, n += 1;
+            }
+          per_rep[t][w].push_back(n > 0 ? s / n : kNaN);
+        }
+    std::vector<double> rep_means, welch;
+    summary_.clear();
+    for (int t = 0; t < 2; ++t)
+      for (int w = 0; w < 2; ++w) {
+        rep_means.insert(rep_means.end(), per_rep[t][w].begin(), per_rep[t][w].end());
+        const std::vector<double> x = finite(per_rep[t][w]);
+        const analysis::Interval ci =
+            analysis::bootstrap_ci(x, seed_for(cfg_.run.seed, kAnalysisStage + 3, 2 * t + w), A_.bootstrap_resamples);
+        summary_.insert(summary_.end(), {analysis::mean(x), ci.lo, ci.hi});
+      }
+    for (int w = 0; w < 2; ++w) {
+      const analysis::TestResult tr = analysis::welch_t_test(finite(per_rep[0][w]), finite(per_rep[1][w]));
+      welch.insert(welch.end(), {tr.statistic, tr.df, tr.p});
+    }
+    welch_p_ = {welch[2], welch[5]};
+    const hsize_t hR = R_;
+    return {{"analysis/adversity/replicate_means", {2, 2, hR}, {0, 1}, rep_means},
+            {"analysis/adversity/summary", {2, 2, 3}, {0, 1}, summary_},
+            {"analysis/adversity/welch", {2, 3}, {0, 1}, welch}};
+  }
+  std::string finish_summary() const override {
+    std::string s = "DTW per step (u), mean over replicates [95% CI]:";
+    char b[256];
+    for (int t = 0; t < 2; ++t) {
+      const double* x = &summary_[6 * t];
+      std::snprintf(b, sizeof b, " %s worse %.4f [%.4f, %.4f] better %.4f [%.4f, %.4f];", kTypes[t].c_str(), x[0], x[1],
+                    x[2], x[3], x[4], x[5]);
+      s += b;
+    }
+    std::snprintf(b, sizeof b, " Welch p worse %.3g, better %.3g", welch_p_[0], welch_p_[1]);
+    return s + b;
+  }
+
+ private:
+  std::string alone(const std::string& bytes) {
+    const int a = unpack<int32_t>(bytes);
+    const std::string& env = envs_[env_];
+    sim::RunResult full;
+    const double offset = collective::alone_feature_offset(cfg_, agents_[a]);
+    const collective::PairOutcome o = collective::run_alone(sim_, agents_[a], env, rec_, &full, offset);
+    AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
+    if (o.status == sim::Status::ok)
+      d.behaviour =
+          analysis::agent_behaviour(collective::agent_scene(agents_[a], env, {}, offset), full, 0, A_.dtw_every);
+    return pack(d);
+  }
+  std::string pair(const std::string& bytes) {
+    const PairTask t = unpack<PairTask>(bytes);
+    const sim::Scene s =
+        collective::pair_scene(agents_[t.a], agents_[t.b], weights_[t.type][t.replicate], stiffness_, envs_[env_]);
+    const sim::RunResult r = sim_.run(s, rec_);
+    PairDone d{r.travel, static_cast<uint8_t>(r.status), {kNaN, kNaN}};
+    if (r.status == sim::Status::ok)
+      for (int slot = 0; slot < 2; ++slot) {
+        const std::vector<double>& ind = behaviour_[slot == 0 ? t.a : t.b];
+        if (ind.empty()) continue;
+        const std::vector<double> teth = analysis::agent_behaviour(s, r, slot, A_.dtw_every);
+        const int n = static_cast<int>(teth.size() / analysis::kBehaviourFeatures);
+        const int m = static_cast<int>(ind.size() / analysis::kBehaviourFeatures);
+        const analysis::DtwResult x = analysis::dtw(teth.data(), n, ind.data(), m, analysis::kBehaviourFeatures, dopt_);
+        d.dtw[slot] = x.distance / (A_.dtw_norm == "sum_lengths" ? n + m
+                                    : A_.dtw_norm == "max_length" ? std::max(n, m)
+                                                                  : x.path_length);
+      }
+    return pack(d);
+  }
+
+  const io::RunConfig& cfg_;
+  const io::RunConfig::Analysis& A_;
+  const std::vector<std::string>& envs_;
+  const std::vector<collective::Agent>& agents_;
+  const std::array<std::vector<std::vector<double>>, 2> weights_;  // [type][replicate]
+  const std::array<std::vector<std::pair<int, int>>, 2> pairs_;     // [type][pair]
+  const std::array<int, 2> type_index_;                            // among deploy's types
+  const std::vector<std::string> novel_;
+  const Deployed deployed_;
+  const int E_, NP_, R_, T_, pop_;
+  const double stiffness_;
+  sim::RunOptions rec_;
+  analysis::DtwOptions dopt_;
+  sim::Simulator sim_;
+  int env_ = 0, pass_ = 0;  // every rank: the step's environment and pass (0 alone, 1 pairs)
+  std::vector<std::vector<double>> behaviour_;  // [agent] its alone behaviour in the current environment
+  std::vector<AloneDone> alone_;
+  std::vector<PairDone> done_;
+  std::vector<double> alone_bl_;
+  std::array<std::vector<double>, 2> dtw_;     // [type] E × R × NP × 2
+  std::array<std::vector<uint8_t>, 2> worse_;  // [type] E × R × NP
+  std::array<std::array<double, 2>, 2> sum_{}, cnt_{};
+  int64_t mismatches_ = 0, round_mismatches_ = 0;
+  std::vector<double> summary_;
+  std::array<double, 2> welch_p_{};
+};
+
+// the familiarity analysis (§8.2) as a plan: one round per novel environment, one PaCMAP fit per type and
+// replicate; Table S1 (finish()) over every environment's counts, restored after a resume
+class FamiliarityPlan final : public Plan {
+ public:
+  // hidden: deploy's hidden states of the two types (E × R × NP × K × 32; none when every round is done)
+  FamiliarityPlan(const io::RunConfig& cfg, std::vector<std::string> novel, std::array<std::vector<float>, 2> hidden,
+                  int K)
+      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)), K_(K),
+        hidden_(std::move(hidden)), EN_(static_cast<int>(novel_.size())), NP_(cfg.deploy.pairs),
+        R_(cfg.connectors.replicates),
+        e_flat_(static_cast<int>(std::find(envs_.begin(), envs_.end(), "flat") - envs_.begin())) {}
+  Info info() const override {
+    return {"analysis familiarity", "analysis", "familiarity_envs_done", "environment", "fits", 1};
+  }
+  int rounds() const override { return EN_; }
+  std::vector<std::string> state_paths() const override {
+    std::vector<std::string> p;
+    for (const std::string& t : kTypes)
+      for (const char* d : {"/counts", "/n_states"}) p.push_back("analysis/familiarity/" + t + d);
+    return p;
+  }
+  void start(int done, const StoredState& s) override {
+    const size_t n = static_cast<size_t>(EN_) * R_;
+    for (int t = 0; t < 2; ++t) {
+      counts_[t].assign(6 * n, 0);
+      ns_[t].assign(2 * n, 0);
+      if (done == 0) continue;
+      const std::vector<double>& c = s.at("analysis/familiarity/" + kTypes[t] + "/counts");
+      const std::vector<double>& m = s.at("analysis/familiarity/" + kTypes[t] + "/n_states");
+      for (size_t k = 0; k < c.size(); ++k) counts_[t][k] = static_cast<int64_t>(c[k]);
+      for (size_t k = 0; k < m.size(); ++k) ns_[t][k] = static_cast<int64_t>(m[k]);
+    }
+  }
+  std::vector<std::string> items(int k) override {
+    const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
+    std::vector<std::string> items;
+    for (int t = 0; t < 2; ++t)
+      for (int r = 0; r < R_; ++r) {
+        const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R_ + r;
+        Rng srng = make_rng(cfg_.run.seed, kAnalysisStage + 1, item);
+        FitTask task;
+        task.seed = seed_for(cfg_.run.seed, kAnalysisStage + 2, item);
+        task.states = states_of(hidden_[t], e_flat_, r, R_, NP_, K_, A_.max_states, srng);
+        const std::vector<float> nov = states_of(hidden_[t], ei, r, R_, NP_, K_, A_.max_states, srng);
+        task.n_train = static_cast<int32_t>(task.states.size() / kHidden);
+        task.n_novel = static_cast<int32_t>(nov.size() / kHidden);
+        task.states.insert(task.states.end(), nov.begin(), nov.end());
+        const size_t row = static_cast<size_t>(k) * R_ + r;
+        ns_[t][2 * row] = task.n_train;
+        ns_[t][2 * row + 1] = task.n_novel;
+        items.push_back(pack(task));
+      }
+    done_.assign(items.size(), {});
+    return items;
+  }
+  std::string compute(const std::string& bytes) override {
+    const FitTask task = unpack<FitTask>(bytes);
+    const int n = task.n_train + task.n_novel;
+    FitDone d;
+    d.counts.assign(6, 0);
+    if (task.n_train < 1 || task.n_novel < 1 || n < 4) {
+      d.embedding.assign(static_cast<size_t>(n) * 2, std::numeric_limits<float>::quiet_NaN());
+      return pack(d);
+    }
+    std::vector<double> X(task.states.begin(), task.states.end());
+    analysis::PacmapOptions po;
+    po.seed = task.seed;
+    const std::vector<double> y = analysis::pacmap_fit(X.data(), n, kHidden, po);
+    std::vector<uint8_t> label(n, 0);
+    std::fill(label.begin() + task.n_train, label.end(), 1);
+    std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
+    if (A_.cell_scale != 1.0)
+      for (double& c : cells) c *= A_.cell_scale;
+    const analysis::Occupancy o = analysis::classify_cells(cells, label);
+    d.counts = {o.states_both, o.states_train_only, o.states_novel_only, o.cells_both, o.cells_train_only,
+                o.cells_novel_only};
+    d.embedding.assign(y.begin(), y.end());
+    return pack(d);
+  }
+  void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<FitDone>(bytes); }
+  Records end_round(int k) override {
+    const hsize_t hEN = EN_, hR = R_, hS = 2 * static_cast<hsize_t>(A_.max_states);
+    Records out;
+    for (int t = 0; t < 2; ++t) {
+      std::vector<int64_t> counts;
+      std::vector<float> emb;
+      for (int r = 0; r < R_; ++r) {
+        const FitDone& d = done_[static_cast<size_t>(t) * R_ + r];
+        counts.insert(counts.end(), d.counts.begin(), d.counts.end());
+        std::vector<float> padded(2 * hS, std::numeric_limits<float>::quiet_NaN());
+        std::copy(d.embedding.begin(), d.embedding.end(), padded.begin());
+        emb.insert(emb.end(), padded.begin(), padded.end());
+      }
+      const size_t at = static_cast<size_t>(k) * R_;
+      std::copy(counts.begin(), counts.end(), counts_[t].begin() + 6 * at);
+      const std::vector<int64_t> ns(ns_[t].begin() + 2 * at, ns_[t].begin() + 2 * (at + R_));
+      const std::string g = "analysis/familiarity/" + kTypes[t];
+      out.push_back({g + "/counts", {hEN, hR, 6}, {k}, std::move(counts)});
+      out.push_back({g + "/n_states", {hEN, hR, 2}, {k}, ns});
+      out.push_back({g + "/embedding", {hEN, hR, hS, 2}, {k}, std::move(emb)});
+    }
+    return out;
+  }
+  std::string summary(int k) const override {
+    std::string s = novel_[k] + ": states in shared cells:";
+    char b[128];
+    for (int t = 0; t < 2; ++t) {
+      double both = 0, all = 0;
+      for (int r = 0; r < R_; ++r) {
+        const size_t row = static_cast<size_t>(k) * R_ + r;
+        both += counts_[t][6 * row], all += ns_[t][2 * row] + ns_[t][2 * row + 1];
+      }
+      std::snprintf(b, sizeof b, " %s %.1f%%", kTypes[t].c_str(), all > 0 ? 100 * both / all : NAN);
+      s += b;
+    }
+    return s;
+  }
+  // Table S1: per novel environment and count, the mean over replicates of each type and Welch's p
+  Records finish() override {
+    std::vector<double> table;
+    for (int k = 0; k < EN_; ++k)
+      for (int c = 0; c < 3; ++c) {
+        std::array<std::vector<double>, 2> v;  // per type, over replicates with a fit
+        for (int t = 0; t < 2; ++t)
+          for (int r = 0; r < R_; ++r) {
+            const size_t row = static_cast<size_t>(k) * R_ + r;
+            const int64_t n = ns_[t][2 * row] + ns_[t][2 * row + 1];
+            const std::vector<int64_t>& x = counts_[t];
+            if (n > 0 && x[6 * row] + x[6 * row + 1] + x[6 * row + 2] == n)
+              v[t].push_back(static_cast<double>(x[6 * row + c]));
+          }
+        table.insert(table.end(), {analysis::mean(v[1]), analysis::mean(v[0]), analysis::welch_t_test(v[1], v[0]).p});
+      }
+    Record r{"analysis/familiarity/table", {static_cast<hsize_t>(EN_), 3, 3}, {}, std::move(table)};
+    for (int k = 0; k < EN_; ++k) r.rows.push_back(k);
+    return {r};
+  }
+
+ private:
+  const io::RunConfig& cfg_;
+  const io::RunConfig::Analysis& A_;
+  const std::vector<std::string>& envs_;
+  const std::vector<std::string> novel_;
+  const int K_;                                     // hidden states per episode
+  const std::array<std::vector<float>, 2> hidden_;  // [type] deploy's hidden states
+  const int EN_, NP_, R_, e_flat_;
+  std::vector<FitDone> done_;
+  std::array<std::vector<int64_t>, 2> counts_, ns_;  // [type] novel E × R × 6, × 2
+};
+
 }  // namespace
 
 void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                         const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const auto& A = cfg.analysis;
   const auto& D = cfg.deploy;
   const std::vector<std::string>& envs = D.environments;
-  const int E = static_cast<int>(envs.size()), NP = D.pairs, R = cfg.connectors.replicates;
+  const int NP = D.pairs, R = cfg.connectors.replicates;
   DIVCOLL_THROW_UNLESS(file.has("deploy") && file.group("deploy").has_attribute("status") &&
                            file.group("deploy").read_string("status") == "complete",
                        file.file() << ": the analysis stage needs a complete deploy stage");
   const std::vector<collective::Agent> agents = load_population(comm, file);
-  const int pop = static_cast<int>(agents.size());
 
   // the two types among deploy's, their weights and pairs
   const std::vector<std::string> deploy_types = split(file.group("deploy").read_string("types"));
-  const int T = static_cast<int>(deploy_types.size());
   std::array<int, 2> type_index{};
   std::array<std::vector<std::vector<double>>, 2> weights;
   for (int t = 0; t < 2; ++t) {
@@ -133,329 +528,52 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     const std::string kind = kTypes[t].substr(0, kTypes[t].find('@'));
     weights[t] = io::read_weights(file, "connectors/" + kind, R);
   }
-  const double stiffness = io::strength_stiffness(cfg, "weak");
-  std::vector<std::pair<int, int>> pairs[2];
+  std::array<std::vector<std::pair<int, int>>, 2> pairs;
   pairs[0] = collective::deploy_uniform_pairs(cfg);
   {
     std::vector<int32_t> dp = file.read<int32_t>("deploy/diverse_pairs", Dims{static_cast<hsize_t>(NP), 2});
     for (int q = 0; q < NP; ++q) pairs[1].emplace_back(dp[2 * q], dp[2 * q + 1]);
   }
   std::vector<std::string> novel;
-  const auto flat_it = std::find(envs.begin(), envs.end(), "flat");
   for (const auto& e : envs)
     if (e != "flat") novel.push_back(e);
-  const int EN = static_cast<int>(novel.size());
 
   if (!file.has("analysis")) file.create_group("analysis");
   io::h5::Node stage = file.group("analysis");
   stage.write_string("status", "running");
-  stage.write_string("types", kTypes[0] + "," + kTypes[1]);
-  stage.write_string("environments", join(envs));
-  stage.write_string("novel_environments", join(novel));
-  if (!file.has("analysis/adversity")) file.create_group("analysis/adversity");
-  if (!file.has("analysis/familiarity")) file.create_group("analysis/familiarity");
-  io::h5::Node adv = file.group("analysis/adversity");
-  if (!adv.has_attribute("deploy_mismatches")) adv.write_int("deploy_mismatches", 0);
+  for (const char* g : {"analysis/adversity", "analysis/familiarity"})
+    if (!file.has(g)) file.create_group(g);
 
-  // deploy's results, to check the re-simulated episodes against (the master checks; every rank reads, as
-  // with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5 metadata
-  // caches, io/h5.hpp)
-  const std::vector<double> deploy_alone = file.read<double>("deploy/agents/travel_u");
-  const std::vector<uint8_t> deploy_alone_status = file.read<uint8_t>("deploy/agents/status");
-  const std::vector<double> deploy_pairs = file.read<double>("deploy/collectives/travel_u");
-  const std::vector<uint8_t> deploy_pairs_status = file.read<uint8_t>("deploy/collectives/status");
+  // adversity: deploy's results, to check the re-simulated episodes against (the master checks; every rank
+  // reads, as with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5
+  // metadata caches, io/h5.hpp)
+  AdversityPlan::Deployed deployed;
+  deployed.alone = file.read<double>("deploy/agents/travel_u");
+  deployed.alone_status = file.read<uint8_t>("deploy/agents/status");
+  deployed.pairs = file.read<double>("deploy/collectives/travel_u");
+  deployed.pairs_status = file.read<uint8_t>("deploy/collectives/status");
+  AdversityPlan adversity(cfg, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
+                          std::move(deployed));
+  drive(comm, cfg, file, adversity, checkpoint);
 
-  const auto t_stage = std::chrono::steady_clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_stage).count(); };
-  sim::Simulator sim;
-  sim::RunOptions rec;
-  rec.steps = D.episode_steps;
-  rec.record = true;
-  const int frames = D.episode_steps / A.dtw_every + 1;
-  analysis::DtwOptions dopt;
-  dopt.band = static_cast<int>(std::ceil(A.dtw_band * frames));
-  dopt.cost = A.dtw_cost == "squared_sqrt" ? analysis::DtwCost::squared_sqrt : analysis::DtwCost::euclidean;
-  dopt.step = A.dtw_step == "symmetric2" ? analysis::DtwStep::symmetric2 : analysis::DtwStep::symmetric1;
-
-  // ---- adversity (§8.1): per environment, agents alone, then the pairs --------------------------------
-  const int dtw_done = stage.has_attribute("dtw_envs_done") ? static_cast<int>(stage.read_int("dtw_envs_done")) : 0;
-  if (rank == 0 && dtw_done > 0) std::printf("analysis: resuming adversity after %d environment(s)\n", dtw_done);
-  std::string env_now;
-  std::vector<std::vector<double>> behaviour(pop);
-  auto alone = [&](const std::string& bytes) {
-    const int a = unpack<int32_t>(bytes);
-    sim::RunResult full;
-    const double offset = collective::alone_feature_offset(cfg, agents[a]);
-    const collective::PairOutcome o = collective::run_alone(sim, agents[a], env_now, rec, &full, offset);
-    AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
-    if (o.status == sim::Status::ok)
-      d.behaviour = analysis::agent_behaviour(collective::agent_scene(agents[a], env_now, {}, offset), full, 0, A.dtw_every);
-    return pack(d);
-  };
-  auto pair = [&](const std::string& bytes) {
-    const PairTask t = unpack<PairTask>(bytes);
-    const sim::Scene s =
-        collective::pair_scene(agents[t.a], agents[t.b], weights[t.type][t.replicate], stiffness, env_now);
-    const sim::RunResult r = sim.run(s, rec);
-    PairDone d{r.travel, static_cast<uint8_t>(r.status), {kNaN, kNaN}};
-    if (r.status == sim::Status::ok)
-      for (int slot = 0; slot < 2; ++slot) {
-        const std::vector<double>& ind = behaviour[slot == 0 ? t.a : t.b];
-        if (ind.empty()) continue;
-        const std::vector<double> teth = analysis::agent_behaviour(s, r, slot, A.dtw_every);
-        const int n = static_cast<int>(teth.size() / analysis::kBehaviourFeatures);
-        const int m = static_cast<int>(ind.size() / analysis::kBehaviourFeatures);
-        const analysis::DtwResult x =
-            analysis::dtw(teth.data(), n, ind.data(), m, analysis::kBehaviourFeatures, dopt);
-        d.dtw[slot] = x.distance / (A.dtw_norm == "sum_lengths" ? n + m
-                                     : A.dtw_norm == "max_length" ? std::max(n, m)
-                                                                  : x.path_length);
-      }
-    return pack(d);
-  };
-  const hsize_t hE = E, hR = R, hN = NP;
-  for (int ei = dtw_done; ei < E; ++ei) {
-    env_now = envs[ei];
-    std::vector<std::string> items;
-    if (rank == 0)
-      for (int32_t a = 0; a < pop; ++a) items.push_back(pack(a));
-    const FarmResult fa = farm(comm, items, alone);
-    long mismatches = adv.read_int("deploy_mismatches");  // every rank reads
-    std::vector<double> alone_bl(pop, kNaN);
-    if (rank == 0) {
-      for (int a = 0; a < pop; ++a) {
-        AloneDone d = unpack<AloneDone>(fa.results[a]);
-        const size_t k = static_cast<size_t>(ei) * pop + a;
-        if (!same_bits(d.travel_u, deploy_alone[k]) || d.status != deploy_alone_status[k]) ++mismatches;
-        alone_bl[a] = d.status == 0 ? d.travel_bl : kNaN;
-        behaviour[a] = std::move(d.behaviour);
-      }
-    }
-    // every rank needs every agent's independent behaviour
-    behaviour = broadcast(comm, behaviour);
-
-    items.clear();
-    if (rank == 0)
-      for (int t = 0; t < 2; ++t)
-        for (int r = 0; r < R; ++r)
-          for (int q = 0; q < NP; ++q) items.push_back(pack(PairTask{t, r, pairs[t][q].first, pairs[t][q].second}));
-    const FarmResult fp = farm(comm, items, pair);
-    std::vector<int64_t> rows;
-    std::array<std::vector<double>, 2> dtw;
-    std::array<std::vector<uint8_t>, 2> worse;
-    std::array<std::array<double, 2>, 2> sum{}, cnt{};
-    if (rank == 0) {
-      rows.push_back(ei);
-      for (int t = 0; t < 2; ++t)
-        for (int r = 0; r < R; ++r)
-          for (int q = 0; q < NP; ++q) {
-            const PairDone d = unpack<PairDone>(fp.results[(static_cast<size_t>(t) * R + r) * NP + q]);
-            const size_t k = ((static_cast<size_t>(ei) * T + type_index[t]) * R + r) * NP + q;
-            if (!same_bits(d.travel_u, deploy_pairs[k]) || d.status != deploy_pairs_status[k]) ++mismatches;
-            dtw[t].push_back(d.dtw[0]);
-            dtw[t].push_back(d.dtw[1]);
-            // the worse agent travelled less alone; a tie (clones) makes the posterior one the worse
-            const uint8_t w = alone_bl[pairs[t][q].second] < alone_bl[pairs[t][q].first] ? 1 : 0;
-            worse[t].push_back(w);
-            for (int slot = 0; slot < 2; ++slot)
-              if (std::isfinite(d.dtw[slot])) sum[t][slot == w ? 0 : 1] += d.dtw[slot], cnt[t][slot == w ? 0 : 1] += 1;
-          }
-    }
-    for (int t = 0; t < 2; ++t) {
-      file.write_rows<double>("analysis/adversity/" + kTypes[t] + "/dtw", {hE, hR, hN, 2}, rows, dtw[t]);
-      file.write_rows<uint8_t>("analysis/adversity/" + kTypes[t] + "/worse_slot", {hE, hR, hN}, rows, worse[t]);
-    }
-    MPI_Bcast(&mismatches, 1, MPI_LONG, 0, comm);
-    adv.write_int("deploy_mismatches", mismatches);
-    stage.write_int("dtw_envs_done", ei + 1);
-    checkpoint();
-    if (rank == 0) {
-      const double el = elapsed();
-      std::printf("analysis: adversity %-11s (%d/%d) DTW per step worse/better:", envs[ei].c_str(), ei + 1, E);
-      for (int t = 0; t < 2; ++t)
-        std::printf(" %s %.4f/%.4f", kTypes[t].c_str(), sum[t][0] / cnt[t][0], sum[t][1] / cnt[t][1]);
-      std::printf(" u | %.0f s, ETA %.0f s\n", el, el / (ei + 1 - dtw_done) * (E - ei - 1));
-      if (mismatches > 0)
-        std::printf("analysis: WARNING %ld re-simulated episode(s) differ from deploy's travel\n", mismatches);
-      std::fflush(stdout);
-    }
-  }
-
-  // ---- familiarity (§8.2): per novel environment, one PaCMAP fit per type and replicate ----------------
-  const int fam_done =
-      stage.has_attribute("familiarity_envs_done") ? static_cast<int>(stage.read_int("familiarity_envs_done")) : 0;
-  const int ms = A.max_states;
-  const hsize_t hEN = EN, hS = 2 * static_cast<hsize_t>(ms);
-  if (flat_it != envs.end() && EN > 0) {
-    const int e_flat = static_cast<int>(flat_it - envs.begin());
-    if (rank == 0 && fam_done > 0) std::printf("analysis: resuming familiarity after %d environment(s)\n", fam_done);
+  // familiarity: flat's hidden states against each novel environment's (every rank reads them while
+  // rounds are left; the master's plan uses them)
+  if (std::find(envs.begin(), envs.end(), "flat") != envs.end() && !novel.empty()) {
     std::array<std::vector<float>, 2> hidden;
     int K = 0;
-    if (fam_done < EN)  // every rank reads
+    const int64_t fam_done = stage.has_attribute("familiarity_envs_done") ? stage.read_int("familiarity_envs_done") : 0;
+    if (fam_done < static_cast<int64_t>(novel.size()))
       for (int t = 0; t < 2; ++t) {
-        Dims d;
-        hidden[t] = file.read<float>("deploy/hidden/" + kTypes[t] + "/states", &d);
-        DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == hE && d[1] == hR && d[2] == hN && d[4] == kHidden,
-                             file.file() << ": deploy/hidden/" << kTypes[t] << "/states has an unexpected shape");
+        const std::string p = "deploy/hidden/" + kTypes[t] + "/states";
+        const Dims d = file.dims(p);
+        DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == envs.size() && d[1] == static_cast<hsize_t>(R) &&
+                                 d[2] == static_cast<hsize_t>(NP) && d[4] == kHidden,
+                             file.file() << ": " << p << " has an unexpected shape");
+        hidden[t] = file.read<float>(p);
         K = static_cast<int>(d[3]);
       }
-    auto fit = [&](const std::string& bytes) {
-      const FitTask task = unpack<FitTask>(bytes);
-      const int n = task.n_train + task.n_novel;
-      FitDone d;
-      d.counts.assign(6, 0);
-      if (task.n_train < 1 || task.n_novel < 1 || n < 4) {
-        d.embedding.assign(static_cast<size_t>(n) * 2, std::numeric_limits<float>::quiet_NaN());
-        return pack(d);
-      }
-      std::vector<double> X(task.states.begin(), task.states.end());
-      analysis::PacmapOptions po;
-      po.seed = task.seed;
-      const std::vector<double> y = analysis::pacmap_fit(X.data(), n, kHidden, po);
-      std::vector<uint8_t> label(n, 0);
-      std::fill(label.begin() + task.n_train, label.end(), 1);
-      std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
-      if (A.cell_scale != 1.0)
-        for (double& c : cells) c *= A.cell_scale;
-      const analysis::Occupancy o = analysis::classify_cells(cells, label);
-      d.counts = {o.states_both, o.states_train_only, o.states_novel_only, o.cells_both, o.cells_train_only,
-                  o.cells_novel_only};
-      d.embedding.assign(y.begin(), y.end());
-      return pack(d);
-    };
-    for (int k = fam_done; k < EN; ++k) {
-      const int ei = static_cast<int>(std::find(envs.begin(), envs.end(), novel[k]) - envs.begin());
-      std::vector<std::string> items;
-      std::array<std::vector<int64_t>, 2> ns;
-      if (rank == 0)
-        for (int t = 0; t < 2; ++t)
-          for (int r = 0; r < R; ++r) {
-            const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R + r;
-            Rng srng = make_rng(cfg.run.seed, kAnalysisStage + 1, item);
-            FitTask task;
-            task.seed = seed_for(cfg.run.seed, kAnalysisStage + 2, item);
-            task.states = states_of(hidden[t], e_flat, r, R, NP, K, ms, srng);
-            const std::vector<float> nov = states_of(hidden[t], ei, r, R, NP, K, ms, srng);
-            task.n_train = static_cast<int32_t>(task.states.size() / kHidden);
-            task.n_novel = static_cast<int32_t>(nov.size() / kHidden);
-            task.states.insert(task.states.end(), nov.begin(), nov.end());
-            ns[t].push_back(task.n_train);
-            ns[t].push_back(task.n_novel);
-            items.push_back(pack(task));
-          }
-      const FarmResult ff = farm(comm, items, fit);
-      std::vector<int64_t> rows;
-      std::array<std::vector<int64_t>, 2> counts;
-      std::array<std::vector<float>, 2> emb;
-      if (rank == 0) {
-        rows.push_back(k);
-        for (int t = 0; t < 2; ++t)
-          for (int r = 0; r < R; ++r) {
-            const FitDone d = unpack<FitDone>(ff.results[static_cast<size_t>(t) * R + r]);
-            counts[t].insert(counts[t].end(), d.counts.begin(), d.counts.end());
-            std::vector<float> padded(2 * hS, std::numeric_limits<float>::quiet_NaN());
-            std::copy(d.embedding.begin(), d.embedding.end(), padded.begin());
-            emb[t].insert(emb[t].end(), padded.begin(), padded.end());
-          }
-      }
-      for (int t = 0; t < 2; ++t) {
-        const std::string g = "analysis/familiarity/" + kTypes[t];
-        file.write_rows<int64_t>(g + "/counts", {hEN, hR, 6}, rows, counts[t]);
-        file.write_rows<int64_t>(g + "/n_states", {hEN, hR, 2}, rows, ns[t]);
-        file.write_rows<float>(g + "/embedding", {hEN, hR, hS, 2}, rows, emb[t]);
-      }
-      stage.write_int("familiarity_envs_done", k + 1);
-      checkpoint();
-      if (rank == 0) {
-        const double el = elapsed();
-        std::printf("analysis: familiarity %-11s (%d/%d) states in shared cells:", novel[k].c_str(), k + 1, EN);
-        for (int t = 0; t < 2; ++t) {
-          double both = 0, all = 0;
-          for (int r = 0; r < R; ++r) both += counts[t][6 * r], all += ns[t][2 * r] + ns[t][2 * r + 1];
-          std::printf(" %s %.1f%%", kTypes[t].c_str(), all > 0 ? 100 * both / all : NAN);
-        }
-        std::printf(" | %.0f s\n", el);
-        std::fflush(stdout);
-      }
-    }
-  }
-
-  // ---- statistics (§8.3), from the datasets written above -----------------------------------------------
-  std::vector<double> rep_means, summary, welch, table;
-  // every rank reads; the master computes
-  std::array<std::vector<double>, 2> dtw_all;
-  std::array<std::vector<uint8_t>, 2> ws_all;
-  std::array<std::vector<int64_t>, 2> counts, ns;
-  for (int t = 0; t < 2; ++t) {
-    dtw_all[t] = file.read<double>("analysis/adversity/" + kTypes[t] + "/dtw");
-    ws_all[t] = file.read<uint8_t>("analysis/adversity/" + kTypes[t] + "/worse_slot");
-    if (EN > 0 && flat_it != envs.end()) {
-      counts[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/counts");
-      ns[t] = file.read<int64_t>("analysis/familiarity/" + kTypes[t] + "/n_states");
-    }
-  }
-  if (rank == 0) {
-    std::array<std::array<std::vector<double>, 2>, 2> per_rep;  // [type][worse/better] over replicates
-    for (int t = 0; t < 2; ++t) {
-      const std::vector<double>& dtw = dtw_all[t];
-      const std::vector<uint8_t>& ws = ws_all[t];
-      for (int w = 0; w < 2; ++w)
-        for (int r = 0; r < R; ++r) {
-          double s = 0, n = 0;
-          for (int e = 0; e < E; ++e)
-            for (int q = 0; q < NP; ++q) {
-              const size_t k = (static_cast<size_t>(e) * R + r) * NP + q;
-              const double v = dtw[2 * k + (w == 0 ? ws[k] : 1 - ws[k])];
-              if (std::isfinite(v)) s += v, n += 1;
-            }
-          per_rep[t][w].push_back(n > 0 ? s / n : kNaN);
-        }
-    }
-    for (int t = 0; t < 2; ++t)
-      for (int w = 0; w < 2; ++w) {
-        rep_means.insert(rep_means.end(), per_rep[t][w].begin(), per_rep[t][w].end());
-        const std::vector<double> x = finite(per_rep[t][w]);
-        const analysis::Interval ci =
-            analysis::bootstrap_ci(x, seed_for(cfg.run.seed, kAnalysisStage + 3, 2 * t + w), A.bootstrap_resamples);
-        summary.insert(summary.end(), {analysis::mean(x), ci.lo, ci.hi});
-      }
-    for (int w = 0; w < 2; ++w) {
-      const analysis::TestResult tr = analysis::welch_t_test(finite(per_rep[0][w]), finite(per_rep[1][w]));
-      welch.insert(welch.end(), {tr.statistic, tr.df, tr.p});
-    }
-    if (EN > 0 && flat_it != envs.end()) {
-      for (int k = 0; k < EN; ++k)
-        for (int c = 0; c < 3; ++c) {
-          std::array<std::vector<double>, 2> v;  // per type, over replicates with a fit
-          for (int t = 0; t < 2; ++t)
-            for (int r = 0; r < R; ++r) {
-              const size_t row = static_cast<size_t>(k) * R + r;
-              const int64_t n = ns[t][2 * row] + ns[t][2 * row + 1];
-              if (n > 0 && counts[t][6 * row] + counts[t][6 * row + 1] + counts[t][6 * row + 2] == n)
-                v[t].push_back(static_cast<double>(counts[t][6 * row + c]));
-            }
-          table.insert(table.end(), {analysis::mean(v[1]), analysis::mean(v[0]), analysis::welch_t_test(v[1], v[0]).p});
-        }
-    }
-  }
-  std::vector<int64_t> rows_t(rank == 0 ? 2 : 0);
-  for (size_t i = 0; i < rows_t.size(); ++i) rows_t[i] = static_cast<int64_t>(i);
-  file.write_rows<double>("analysis/adversity/replicate_means", {2, 2, hR}, rows_t, rep_means);
-  file.write_rows<double>("analysis/adversity/summary", {2, 2, 3}, rows_t, summary);
-  file.write_rows<double>("analysis/adversity/welch", {2, 3}, rows_t, welch);
-  if (EN > 0 && flat_it != envs.end()) {
-    std::vector<int64_t> rows_en;
-    if (rank == 0)
-      for (int k = 0; k < EN; ++k) rows_en.push_back(k);
-    file.write_rows<double>("analysis/familiarity/table", {hEN, 3, 3}, rows_en, table);
-  }
-  if (rank == 0) {
-    std::printf("analysis: DTW per step (u), mean over replicates [95%% CI]:");
-    for (int t = 0; t < 2; ++t)
-      std::printf(" %s worse %.4f [%.4f, %.4f] better %.4f [%.4f, %.4f];", kTypes[t].c_str(), summary[6 * t],
-                  summary[6 * t + 1], summary[6 * t + 2], summary[6 * t + 3], summary[6 * t + 4], summary[6 * t + 5]);
-    std::printf(" Welch p worse %.3g, better %.3g\n", welch[2], welch[5]);
-    std::fflush(stdout);
+    FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K);
+    drive(comm, cfg, file, familiarity, checkpoint);
   }
   stage.write_string("status", "complete");
   checkpoint();

@@ -3,7 +3,9 @@
 // statistics of Fig. 3A and Table S1. It reads only the agents, connectors and deploy groups, so it can be
 // added to any finished run with `divcoll run CONFIG --from analysis --base RUN.h5 --out NEW.h5`.
 //
-// Adversity (§8.1), one task-farm round pair per environment (checkpoint after each):
+// Two plans run by the driver (mpi/plan.hpp), both counting in /analysis; their statistics are each plan's
+// finish(), over its rows restored after a resume.
+// Adversity (§8.1), one round of two farm passes per environment (committed after each, dtw_envs_done):
 //   1. every agent alone, recorded: its behaviour = its 11 masses relative to its centre of mass every
 //      analysis.dtw_every steps (frames × 22), broadcast to every rank;
 //   2. every pair episode of the two types, recorded: for each of its two agents the DTW distance between
@@ -13,8 +15,8 @@
 //   attribute adversity/deploy_mismatches, printed if not 0).
 //   Worse / better agent: the one that travelled less / more alone in that environment. Clones (uniform pairs)
 //   tie; a tie makes the posterior agent the worse one (counted in adversity/<type>/ties).
-// Familiarity (§8.2), one round per novel environment (checkpoint after each): per type and replicate, the
-//   hidden states deploy recorded in flat and in the environment (ok episodes only; at most
+// Familiarity (§8.2), one round per novel environment (committed after each, familiarity_envs_done): per
+//   type and replicate, the hidden states deploy recorded in flat and in the environment (ok episodes only; at most
 //   analysis.max_states per environment, a seeded subsample), one PaCMAP fit on both together, coordinates
 //   rounded half to even, each state counted as in a cell holding both / only training / only novel states.
 // Statistics (§8.3): per replicate the mean DTW of the worse and of the better agents over environments and
@@ -50,8 +52,5 @@
 namespace divcoll::mpi {
 
 inline constexpr uint64_t kAnalysisStage = io::stage_stream("analysis");
-
-void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                        const std::function<void()>& checkpoint);
 
 }  // namespace divcoll::mpi

@@ -4,6 +4,7 @@
 
 #include "common/check.hpp"
 #include "io/run_read.hpp"
+#include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
 
 namespace divcoll::mpi {

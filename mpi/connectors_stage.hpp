@@ -66,7 +66,4 @@ struct SlotGroups {
 };
 SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots);
 
-void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                          const std::function<void()>& checkpoint);
-
 }  // namespace divcoll::mpi

@@ -28,7 +28,4 @@ namespace divcoll::mpi {
 
 inline constexpr uint64_t kDeployStage = io::stage_stream("deploy");
 
-void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint);
-
 }  // namespace divcoll::mpi

@@ -4,6 +4,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <utility>
+#include <variant>
+
+#include <boost/serialization/utility.hpp>
 
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
@@ -24,11 +28,15 @@ void serialize(Ar& ar, RecordHead& h, unsigned) {
 
 std::string bcast_string(MPI_Comm comm, const std::string& s) { return broadcast(comm, s); }
 
-// DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<done>: every rank flushes the file and exits between the state and
-// the counter of that commit (a kill placed by the program itself, for tests/mpi/commit_kill_test.sh)
-void debug_exit_in_commit(MPI_Comm comm, const io::h5::File& file, const std::string& group, int done) {
+// DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<done> (or <group>@<counter>:<done>, where plans share a group):
+// every rank flushes the file and exits between the state and the counter of that commit (a kill placed by
+// the program itself, for tests/mpi/commit_kill_test.sh)
+void debug_exit_in_commit(MPI_Comm comm, const io::h5::File& file, const std::string& group, const std::string& counter,
+                          int done) {
   const char* e = std::getenv("DIVCOLL_DEBUG_EXIT_IN_COMMIT");
-  if (!e || std::string(e) != group + ":" + std::to_string(done)) return;
+  if (!e) return;
+  const std::string want = std::string(e), at = std::to_string(done);
+  if (want != group + ':' + at && want != group + '@' + counter + ':' + at) return;
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
   MPI_Barrier(comm);
   int rank = 0;
@@ -71,6 +79,25 @@ void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& recor
   }
 }
 
+namespace {
+
+// the group and the attribute name of a plan's attribute `name` (relative to `group`; '/' names a subgroup)
+std::pair<std::string, std::string> attribute_at(const std::string& group, const std::string& name) {
+  const size_t slash = name.rfind('/');
+  if (slash == std::string::npos) return {group, name};
+  return {group + "/" + name.substr(0, slash), name.substr(slash + 1)};
+}
+
+void write_attribute(const io::h5::File& file, const std::string& group, const std::string& name,
+                     const std::variant<std::string, int64_t>& value) {
+  const auto [g, a] = attribute_at(group, name);
+  if (!file.has(g)) file.create_group(g);
+  if (const auto* text = std::get_if<std::string>(&value)) file.group(g).write_string(a, *text);
+  else file.group(g).write_int(a, std::get<int64_t>(value));
+}
+
+}  // namespace
+
 void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint) {
   int rank = 0;
@@ -79,23 +106,23 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const std::string& label = info.label;
   if (!file.has(info.group)) file.create_group(info.group);
   io::h5::Node group = file.group(info.group);
-  if (info.owns_stage) {
-    group.write_string("status", "running");
-    for (const Attribute& a : plan.attributes()) {
-      if (const auto* text = std::get_if<std::string>(&a.value)) group.write_string(a.name, *text);
-      else group.write_int(a.name, std::get<int64_t>(a.value));
-    }
-    write_records(comm, file, rank == 0 ? plan.setup() : Records{});
-  }
-  const int R = plan.rounds();
+  if (info.owns_stage) group.write_string("status", "running");
+  for (const Attribute& a : plan.attributes()) write_attribute(file, info.group, a.name, a.value);
+  write_records(comm, file, rank == 0 ? plan.setup() : Records{});
+  const int R = plan.rounds(), passes = info.passes;
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
-  // where to start: the state committed with the counter (the master's plan holds it)
-  // every rank reads the state (a read made by one rank alone unbalances the ranks' HDF5 metadata caches:
-  // io/h5.hpp); the master's plan holds it
+  // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
+  // alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp); the master's plan holds it
   StoredState stored;
-  if (done > 0)
+  if (done > 0) {
     for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
+    for (const auto& [name, value] : plan.state_attributes()) {
+      const auto [g, a] = attribute_at(info.group, name);
+      if (file.has(g) && file.group(g).has_attribute(a))
+        stored[name] = {static_cast<double>(file.group(g).read_int(a))};
+    }
+  }
   if (rank == 0) {
     plan.start(done, stored);
     if (done >= R)
@@ -105,7 +132,10 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   }
   auto commit = [&](int rounds_done) {
     write_records(comm, file, rank == 0 ? plan.state() : Records{});
-    debug_exit_in_commit(comm, file, info.group, rounds_done);
+    using Counts = std::vector<std::pair<std::string, int64_t>>;
+    for (const auto& [name, value] : broadcast(comm, rank == 0 ? plan.state_attributes() : Counts{}))
+      write_attribute(file, info.group, name, value);
+    debug_exit_in_commit(comm, file, info.group, info.counter, rounds_done);
     group.write_int(info.counter, rounds_done);
     checkpoint();
   };
@@ -115,32 +145,42 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const int end = R + (plan.closing_round() ? 1 : 0);
   for (int r = done; r < end; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
-    plan.take_input(r, bcast_string(comm, rank == 0 ? plan.round_input(r) : std::string()));
-    const std::vector<std::string> items = rank == 0 ? plan.items(r) : std::vector<std::string>{};
-    FarmOptions fo;
-    fo.on_result = [&](int64_t i, const std::string& bytes) { plan.reduce(r, i, bytes); };
-    fo.progress = [&](int k, int n) {
-      const double now = since(t_stage);
-      if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
-        last_print = now;
-        std::printf("%s: %s %d/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), r + 1, R, k, n,
-                    info.item_word.c_str(), now);
-        std::fflush(stdout);
-      }
-    };
-    farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
-    write_records(comm, file, rank == 0 ? plan.end_round(r) : Records{});
+    size_t n_items = 0;
+    for (int pass = 0; pass < passes; ++pass) {
+      const int step = r * passes + pass;
+      plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
+      const std::vector<std::string> items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
+      n_items += items.size();
+      FarmOptions fo;
+      fo.on_result = [&](int64_t i, const std::string& bytes) { plan.reduce(step, i, bytes); };
+      fo.progress = [&](int k, int n) {
+        const double now = since(t_stage);
+        if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
+          last_print = now;
+          std::printf("%s: %s %d/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), r + 1, R, k, n,
+                      info.item_word.c_str(), now);
+          std::fflush(stdout);
+        }
+      };
+      farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
+      write_records(comm, file, rank == 0 ? plan.end_round(step) : Records{});
+    }
     if (r >= R) continue;  // the closing round: recorded, not counted
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
     if ((r + 1) % every == 0 || r + 1 == R) commit(r + 1);
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
       std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(), r + 1, R,
-                  plan.summary(r).c_str(), items.size() / dt, info.item_word.c_str(), el, (R - r - 1) * dt);
+                  plan.summary(r).c_str(), n_items / dt, info.item_word.c_str(), el, (R - r - 1) * dt);
       std::fflush(stdout);
     }
   }
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
+  if (rank == 0) {
+    const std::string s = plan.finish_summary();
+    if (!s.empty()) std::printf("%s: %s\n", label.c_str(), s.c_str());
+    std::fflush(stdout);
+  }
   if (info.owns_stage) {
     group.write_string("status", "complete");
     checkpoint();

@@ -7,17 +7,20 @@
 // Commit: the plan's state and the counter are written together and then checkpointed (mpi/checkpoint.hpp),
 // one step; --resume starts from the last checkpoint, never from what a killed job left in the run file
 // after it, so a kill between the state and the counter (or anywhere else) resumes a consistent pair.
-// The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> makes every rank flush the run
+// The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> (or <group>@<counter>:<rounds done>,
+// where plans share a group) makes every rank flush the run
 // file and exit (code 86) right between writing that commit's state and its counter (tests/mpi/commit_kill_test.sh).
 #pragma once
 
 #include <mpi.h>
 
+#include <array>
 #include <functional>
 #include <string>
 
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "io/pipeline.hpp"
 #include "mpi/plan.hpp"
 
 namespace divcoll::mpi {
@@ -30,5 +33,24 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
 
 // writes the master's records; every rank calls it (the others' `records` are ignored)
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);
+
+// ---- the stages ----------------------------------------------------------------------------------------
+// every stage's runner, declared from the one stage list (io/pipeline.hpp DIVCOLL_STAGES) and defined beside
+// the stage's plans: run_<name>_stage reads the stage's inputs from the run file, builds its plans and
+// drive()s them (every rank calls it)
+using StageRunner = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
+#define DIVCOLL_STAGE_RUNNER(name, stream, reads) \
+  void run_##name##_stage(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
+DIVCOLL_STAGES(DIVCOLL_STAGE_RUNNER)
+#undef DIVCOLL_STAGE_RUNNER
+
+struct Stage {
+  io::StageInfo info;
+  StageRunner run;
+};
+// the stages in the order they run
+#define DIVCOLL_STAGE(name, stream, reads) Stage{{#name, stream, reads}, run_##name##_stage},
+inline const std::array kStages = {DIVCOLL_STAGES(DIVCOLL_STAGE)};
+#undef DIVCOLL_STAGE
 
 }  // namespace divcoll::mpi

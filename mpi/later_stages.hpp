@@ -35,11 +35,4 @@ inline constexpr uint64_t kGradedStage = io::stage_stream("graded");
 //   deploy/agents/travel_bl, travel_u, status   (E × graded.population)
 //   deploy/pairs/travel_bl, travel_u, status    (E × R × pairs)
 
-void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                           const std::function<void()>& checkpoint);
-void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                       const std::function<void()>& checkpoint);
-void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint);
-
 }  // namespace divcoll::mpi

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -26,7 +27,8 @@ struct Record {
 };
 using Records = std::vector<Record>;
 
-// an attribute of the plan's group: text or an integer
+// an attribute of the plan's group (a name with '/' in it: of that subgroup, e.g. "adversity/deploy_mismatches"):
+// text or an integer
 struct Attribute {
   std::string name;
   std::variant<std::string, int64_t> value;
@@ -48,41 +50,50 @@ class Plan {
     std::string item_word = "items";          // progress lines (per second)
     int commit_every = 0;                     // rounds per commit; 0: output.checkpoint_every
     // a stage of its own (else a part of one, e.g. connector training inside the specialists stage): the
-    // driver then sets the group's status ("running", then "complete" with a last checkpoint), writes
-    // attributes() (every rank: the same values) and setup() (master: rows drawn once) when it starts
+    // driver then sets the group's status ("running", then "complete" with a last checkpoint)
     bool owns_stage = false;
+    // farm passes per round: a round of several passes (e.g. agents alone, then pairs that use their
+    // results) is counted and committed as one. The methods marked (step) get step = round · passes + pass
+    int passes = 1;
   };
   virtual Info info() const = 0;
   virtual int rounds() const = 0;                       // counted rounds: 0 .. rounds()-1
   virtual bool closing_round() const { return false; }  // one more, uncounted round (index rounds()), redone on resume
+  // written when the plan starts (every rank: the same values), and rows drawn once (master)
   virtual std::vector<Attribute> attributes() const { return {}; }
   virtual Records setup() { return {}; }
 
   // ---- state ----
-  // the datasets of its state (restore() gets them back after a resume)
+  // the datasets of its state (start() gets them back after a resume); rows written by end_round() count
+  // as committed with the round
   virtual std::vector<std::string> state_paths() const { return {}; }
+  // integer attributes of its state (names as Attribute's; every rank: the names, the master: the values),
+  // committed with the counter; start() gets their committed values back under their names, one value each
+  virtual std::vector<std::pair<std::string, int64_t>> state_attributes() const { return {}; }
   // master: from nothing (done == 0) or from the state committed with `done` rounds
   virtual void start(int done, const StoredState& stored) = 0;
   // master: its state now, to commit with the counter
   virtual Records state() const { return {}; }
 
-  // ---- a round ----
-  // master: data every rank needs for compute() in this round (e.g. the weights); handed to take_input()
-  virtual std::string round_input(int round) { (void)round; return {}; }
+  // ---- a round (a pass of one, with Info::passes > 1) ----
+  // master: data every rank needs for compute() in this step (e.g. the weights); handed to take_input()
+  virtual std::string round_input(int step) { (void)step; return {}; }
   // every rank
-  virtual void take_input(int round, const std::string& input) { (void)round, (void)input; }
-  // master: the round's items
-  virtual std::vector<std::string> items(int round) = 0;
+  virtual void take_input(int step, const std::string& input) { (void)step, (void)input; }
+  // master: the step's items
+  virtual std::vector<std::string> items(int step) = 0;
   // every rank, in a thread of the farm: one item's pure compute (task bytes -> result bytes)
   virtual std::string compute(const std::string& item) = 0;
-  // master: every result of the round, in item order
-  virtual void reduce(int round, int64_t item, const std::string& result) = 0;
-  // master: after the round's last result: its step, and the rows it records
-  virtual Records end_round(int round) = 0;
+  // master: every result of the step, in item order
+  virtual void reduce(int step, int64_t item, const std::string& result) = 0;
+  // master: after the step's last result: its reduction, and the rows it records
+  virtual Records end_round(int step) = 0;
   // master: one line's summary of the round just ended (after "label: iteration k/N: ")
   virtual std::string summary(int round) const { (void)round; return {}; }
-  // master: the rows recorded once the rounds are done (written again when a finished stage is resumed)
+  // master: the rows recorded once the rounds are done (written again when a finished stage is resumed),
+  // and a line's summary of them (printed after "label: " when not empty)
   virtual Records finish() { return {}; }
+  virtual std::string finish_summary() const { return {}; }
 };
 
 }  // namespace divcoll::mpi

@@ -27,13 +27,10 @@
 #include "cli/commands.hpp"
 #include "io/file_lock.hpp"
 #include "io/pipeline.hpp"
-#include "mpi/agents_stage.hpp"
+#include "io/run_read.hpp"
 #include "mpi/agree.hpp"
-#include "mpi/analysis_stage.hpp"
 #include "mpi/checkpoint.hpp"
-#include "mpi/connectors_stage.hpp"
-#include "mpi/deploy_stage.hpp"
-#include "mpi/later_stages.hpp"
+#include "mpi/driver.hpp"
 #include "mpi/scheduler.hpp"
 #include "mpi/stop.hpp"
 
@@ -113,19 +110,6 @@ void derive_run_file(const std::string& base, const std::string& path, const std
   fs::rename(tmp, path);
 }
 
-// what each stage reads from earlier stages (besides its own group)
-const std::vector<std::pair<std::string, std::vector<std::string>>>& stage_inputs() {
-  static const std::vector<std::pair<std::string, std::vector<std::string>>> t = {
-      {"agents", {}},
-      {"connectors", {"agents"}},
-      {"deploy", {"agents", "connectors"}},
-      {"specialists", {"agents"}},
-      {"scaling", {"agents", "connectors"}},
-      {"graded", {"agents"}},
-      {"analysis", {"agents", "connectors", "deploy"}}};
-  return t;
-}
-
 bool complete_in(const io::h5::File& f, const std::string& stage) {
   return f.has(stage) && f.group(stage).has_attribute("status") && f.group(stage).read_string("status") == "complete";
 }
@@ -168,10 +152,11 @@ void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std
     }
   }
   const std::string where = !existing.empty() ? existing : !args.from.empty() ? args.base : std::string();
-  for (const auto& [stage, needs] : stage_inputs()) {
+  for (const io::StageInfo& s : io::kStageTable) {
+    const std::string stage(s.name);
     const bool runs = args.agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);
     if (!runs || present.count(stage)) continue;
-    for (const std::string& need : needs) {
+    for (const std::string& need : io::split(std::string(s.reads))) {
       if (present.count(need) || (!args.agents_only && io::stage_enabled(cfg, need))) continue;
       throw InputError(msg() << "stage " << stage << " reads the results of stage " << need << ", but " << need
                              << " is neither in run.stages nor complete in "
@@ -406,17 +391,12 @@ int run_session(const RunArgs& args) {
       std::printf("resuming %s from its last checkpoint (resumed %lld time(s))\n", path.c_str(),
                   static_cast<long long>(resumed));
 
-    using StageFn = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
-    const std::vector<std::pair<std::string, StageFn>> stages = {
-        {"agents", run_agents_stage},           {"connectors", run_connectors_stage},
-        {"deploy", run_deploy_stage},           {"specialists", run_specialists_stage},
-        {"scaling", run_scaling_stage},         {"graded", run_graded_stage},
-        {"analysis", run_analysis_stage}};
     try {
       // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
       // takes effect here
       if (!existing) checkpoints.force();
-      for (const auto& [name, fn] : stages) {
+      for (const Stage& stage : kStages) {
+        const std::string name(stage.info.name);
         if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
         if (file.has(name) && file.group(name).has_attribute("status") &&
             file.group(name).read_string("status") == "complete") {
@@ -425,7 +405,7 @@ int run_session(const RunArgs& args) {
         }
         const auto t1 = std::chrono::steady_clock::now();
         const FarmClock before = farm_clock();
-        fn(MPI_COMM_WORLD, cfg, file, ckpt);
+        stage.run(MPI_COMM_WORLD, cfg, file, ckpt);
         checkpoints.force();  // a finished stage is never redone on --resume
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         // how busy each rank was (seconds computing items), gathered on every rank

@@ -1,7 +1,7 @@
 // the pipeline's fixed tables, one home each: its stages in the order they run with the random stream each
-// draws from (SPEC §10: every draw is seeded by (run.seed, stream, item)), and the connector kinds (SPEC §6.2,
-// §6.4) with the config key that gives their stiffness. The config schema takes its allowed names from
-// here, the stages their stream ids, the commands their stiffness.
+// draws from (SPEC §10: every draw is seeded by (run.seed, stream, item)) and what each reads, and the
+// connector kinds (SPEC §6.2, §6.4) with the config key that gives their stiffness. The config schema takes
+// its allowed names from here, `divcoll run` its stages, the stages their stream ids, the commands their stiffness.
 #pragma once
 
 #include <array>
@@ -16,20 +16,30 @@
 namespace divcoll::io {
 
 // ---- stages --------------------------------------------------------------------------------------
-struct StageInfo {
-  std::string_view name;
-  uint64_t stream;  // first random stream id; a stage may use ids from here up (see each stage's plan)
-};
-// streams: agents 1000 + generation; connectors 2000 + kind·R + replicate; deploy 3000 (pairs) and 3001
+// The one stage list, in the order the stages run: X(name, first random stream id, the stages whose results
+// it reads (comma separated)). A stage's runner is mpi's run_<name>_stage (declared from this list in
+// mpi/driver.hpp, defined beside its plans); its rows are in the run-file schema (io/run_file.cpp). Adding
+// a stage: a line here, its runner and plans, its rows; `run.stages` and `divcoll run`'s checks follow.
+// Streams: agents 1000 + generation; connectors 2000 + kind·R + replicate; deploy 3000 (pairs) and 3001
 // (hidden states); specialists 4000 + env·R + replicate; scaling 5000 + size; analysis 6000 + 1..3;
 // graded 1000000 + 100000·population (+ 50000 + replicate for its connectors, + 90000 for its pairs)
-inline constexpr std::array<StageInfo, 7> kStageTable = {{{"agents", 1000},
-                                                     {"connectors", 2000},
-                                                     {"deploy", 3000},
-                                                     {"specialists", 4000},
-                                                     {"scaling", 5000},
-                                                     {"graded", 1000000},
-                                                     {"analysis", 6000}}};
+#define DIVCOLL_STAGES(X)                         \
+  X(agents, 1000, "")                             \
+  X(connectors, 2000, "agents")                   \
+  X(deploy, 3000, "agents,connectors")            \
+  X(specialists, 4000, "agents")                  \
+  X(scaling, 5000, "agents,connectors")           \
+  X(graded, 1000000, "agents")                    \
+  X(analysis, 6000, "agents,connectors,deploy")
+
+struct StageInfo {
+  std::string_view name;
+  uint64_t stream;         // first random stream id; a stage may use ids from here up (see each stage's plan)
+  std::string_view reads;  // the stages whose results it reads, comma separated
+};
+#define DIVCOLL_STAGE_INFO(name, stream, reads) StageInfo{#name, stream, reads},
+inline constexpr std::array kStageTable = {DIVCOLL_STAGES(DIVCOLL_STAGE_INFO)};
+#undef DIVCOLL_STAGE_INFO
 constexpr uint64_t stage_stream(std::string_view name) {
   for (const StageInfo& s : kStageTable)
     if (s.name == name) return s.stream;

@@ -6,7 +6,8 @@
 # the extended one (keep_best, with its closing round), the graded stage's connectors (where a mismatch
 # after kill and resume was once seen), and the deployment plans of the specialists and of a graded
 # population (killed after their second environment; specialists.iterations=1, so the specialists'
-# training never commits 2 under the same group). Usage: commit_kill_test.sh DIVCOLL SOURCE_DIR
+# training never commits 2 under the same group), and both plans of the analysis stage (adversity after its
+# second environment, familiarity after its first novel one). Usage: commit_kill_test.sh DIVCOLL SOURCE_DIR
 set -euo pipefail
 D=$1 SRC=$2
 source "$SRC/jobs/mpi-env.sh"
@@ -39,4 +40,7 @@ check keep_best connectors:3 'run.stages=["agents","connectors"]' connectors.ite
 check graded graded/same_shape/connectors:2 'run.stages=["agents","graded"]' connectors.iterations=3
 check specialists_deploy specialists:2 'run.stages=["agents","specialists"]' specialists.iterations=1
 check graded_deploy graded/same_shape:2 'run.stages=["agents","graded"]' connectors.iterations=1
+ANALYSIS='run.stages=["agents","connectors","deploy","analysis"]'
+check analysis_adversity analysis@dtw_envs_done:2 "$ANALYSIS" connectors.iterations=1
+check analysis_familiarity analysis@familiarity_envs_done:1 "$ANALYSIS" connectors.iterations=1
 echo "commit kill: passed"
