@@ -3,15 +3,20 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 #include "common/check.hpp"
 #include "mpi/agree.hpp"
+#include "mpi/scheduler.hpp"
+#include "mpi/stop.hpp"
 
 namespace divcoll::mpi {
 namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
 
 std::string checkpoint_path(const std::string& run_path) { return run_path + ".ckpt"; }
 
@@ -40,18 +45,22 @@ void atomic_copy(const std::string& src, const std::string& dst, bool verify) {
   }
 }
 
-// one int from rank 0 to all
+// one int from rank 0 to all (the others wait sleeping, not spinning in MPI)
 int bcast_int(MPI_Comm comm, int v) {
-  MPI_Bcast(&v, 1, MPI_INT, 0, comm);
+  MPI_Request req;
+  MPI_Ibcast(&v, 1, MPI_INT, 0, comm, &req);
+  wait_sleeping(req);
   return v;
 }
 
 }  // namespace
 
 void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) {
-  check_symmetric_io(comm, "a checkpoint");
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
-  MPI_Barrier(comm);
+  // every rank's writes are on disk before rank 0 copies; the other ranks wait for the copy sleeping
+  MPI_Request req;
+  MPI_Ibarrier(comm, &req);
+  wait_sleeping(req);
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   int ok = 1;
@@ -71,6 +80,30 @@ void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) 
                            << space.available / 1024 << " KiB free on its file system; the last checkpoint is "
                            << "kept: free space and rerun with --resume)");
   }
+}
+
+Checkpointer::Checkpointer(MPI_Comm comm, io::h5::File& file, std::string run_path, double interval_s)
+    : comm_(comm), file_(file), path_(std::move(run_path)), interval_s_(interval_s), last_(Clock::now()) {}
+
+void Checkpointer::at(bool force) {
+  int rank = 0;
+  MPI_Comm_rank(comm_, &rank);
+  check_symmetric_io(comm_, "a checkpoint");  // at every commit, whether it copies or not
+  // one collective decides for every rank: any rank's stop request, and rank 0's clock
+  int v[2] = {stop_signal(), 0};
+  if (rank == 0)
+    v[1] = force || interval_s_ <= 0 || std::chrono::duration<double>(Clock::now() - last_).count() >= interval_s_;
+  MPI_Request req;
+  MPI_Iallreduce(MPI_IN_PLACE, v, 2, MPI_INT, MPI_MAX, comm_, &req);
+  wait_sleeping(req);
+  if (v[0] != 0 || v[1] != 0) {
+    const auto t0 = Clock::now();
+    checkpoint(comm_, file_, path_);
+    last_ = Clock::now();
+    copy_s_ += std::chrono::duration<double>(last_ - t0).count();
+    ++copies_;
+  }
+  if (v[0] != 0) throw StopRequested{v[0]};
 }
 
 bool valid_run_file(const std::string& path, std::string* why) {

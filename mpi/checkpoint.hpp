@@ -1,11 +1,19 @@
 // crash-safe run files. HDF5 has no journal: a job killed while it writes can leave the file's metadata
 // half-updated, older generations included. So the run file is created under a temporary name and
-// renamed into place, and at every checkpoint it is flushed and copied to RUN.h5.ckpt (copy, fsync,
-// atomic rename). --resume validates RUN.h5 by reading every dataset and falls back to the checkpoint.
+// renamed into place, and at a checkpoint it is flushed and copied to RUN.h5.ckpt (copy, fsync, read
+// back, atomic rename). --resume continues from the checkpoint (the run file only when there is none).
+//
+// A stage commits its state to the run file every output.checkpoint_every rounds; the copy to the
+// checkpoint, which costs the run file's size twice (copy and read-back) while every rank waits, is made
+// at a commit only when output.checkpoint_interval_s of wall time have passed since the last one (rank 0's
+// clock decides for all), at the end of every stage, and when a stop was asked for. Rounds committed
+// after the last copy are redone on --resume with the same results, so where the copies fall never
+// changes the run file.
 #pragma once
 
 #include <mpi.h>
 
+#include <chrono>
 #include <string>
 
 #include "io/h5.hpp"
@@ -16,6 +24,31 @@ std::string checkpoint_path(const std::string& run_path);
 
 // every rank calls it: flush, then rank 0 copies the file to its checkpoint
 void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path);
+
+// when to copy: every rank holds one and calls it at the same points
+class Checkpointer {
+ public:
+  // interval_s: least wall time between copies (0: a copy at every commit)
+  Checkpointer(MPI_Comm comm, io::h5::File& file, std::string run_path, double interval_s);
+  // at a commit: copies if the interval has passed on rank 0 or a stop was asked for on any rank; then
+  // stops (StopRequested on every rank, right after the copy) if one was asked for
+  void commit() { at(false); }
+  // copies now (a stage's end, a new run file), then stops if asked
+  void force() { at(true); }
+  int copies() const { return copies_; }
+  double copy_s() const { return copy_s_; }  // wall time spent in copies (every rank waits for them)
+
+ private:
+  void at(bool force);
+  MPI_Comm comm_;
+  io::h5::File& file_;
+  std::string path_;
+  double interval_s_;
+  bool copied_ = false;
+  std::chrono::steady_clock::time_point last_{};
+  int copies_ = 0;
+  double copy_s_ = 0;
+};
 
 // rank-local: a divcoll run file whose every dataset reads back; `why` says what is wrong otherwise
 bool valid_run_file(const std::string& path, std::string* why);

@@ -33,7 +33,8 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
 
 // a stage, or a part of one with its own status (a graded population, its agents), run with its status in
 // `group` (created if missing): nothing if the status is "complete" (returns false); else status "running",
-// body(), status "complete" and a checkpoint. The only writer of status; every rank calls it
+// body(), status "complete" and `checkpoint` (divcoll run passes a forced copy for a stage's end). The only
+// writer of status; every rank calls it
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
                      const std::function<void()>& body);
 // whether `group`'s status is "complete" (every rank reads)

@@ -304,7 +304,7 @@ int run_session(const RunArgs& args) {
           const auto a = io::flat(before), b = io::flat(cfg);
           // keys that choose what runs now or how it reports, not what it computes, may change
           const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
-                                              "output.checkpoint_every"};
+                                              "output.checkpoint_every", "output.checkpoint_interval_s"};
           for (size_t i = 0; i < a.size(); ++i)
             if (a[i].second != b[i].second && !free.count(a[i].first))
               diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
@@ -373,10 +373,10 @@ int run_session(const RunArgs& args) {
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    auto ckpt = [&] {
-      checkpoint(MPI_COMM_WORLD, file, path);
-      stop_point(MPI_COMM_WORLD);
-    };
+    // the stages call ckpt at each commit; it copies the run file to its checkpoint when
+    // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
+    Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
+    auto ckpt = [&] { checkpoints.commit(); };
     file.write_int("ranks", size);
     if (rank == 0)
       std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
@@ -390,7 +390,7 @@ int run_session(const RunArgs& args) {
     try {
       // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
       // takes effect here
-      if (!existing) ckpt();
+      if (!existing) checkpoints.force();
       for (const Stage& stage : kStages) {
         const std::string name(stage.info.name);
         if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
@@ -400,7 +400,8 @@ int run_session(const RunArgs& args) {
         }
         const auto t1 = std::chrono::steady_clock::now();
         const FarmClock before = farm_clock();
-        run_with_status(file, name, ckpt, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
+        // a finished stage is never redone on --resume: its end is a forced checkpoint
+        run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         // how busy each rank was (seconds computing items), gathered on every rank
         double busy = farm_clock().compute_s - before.compute_s;

@@ -46,16 +46,6 @@ class Backoff {
   int us_ = kMinUs;
 };
 
-// waits for a non-blocking MPI request without spinning on the core
-void wait_sleeping(MPI_Request& req) {
-  Backoff b;
-  for (int done = 0;;) {
-    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
-    if (done) return;
-    b.sleep();
-  }
-}
-
 // a block message (tasks or results): [first | count | count sizes | payloads], all int64
 std::string pack_block(int64_t first, const std::string* payloads, int64_t count) {
   size_t total = (2 + count) * sizeof(int64_t);
@@ -494,6 +484,15 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
 }
 
 }  // namespace
+
+void wait_sleeping(MPI_Request& req) {
+  Backoff b;
+  for (int done = 0;;) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    b.sleep();
+  }
+}
 
 FarmClock& farm_clock() {
   static FarmClock clock;

@@ -56,6 +56,10 @@ struct FarmClock {
 };
 FarmClock& farm_clock();
 
+// waits for a non-blocking MPI request without spinning on the core (sleeps 20 µs doubling to 2 ms between
+// tests): for collectives where some ranks wait while another works
+void wait_sleeping(MPI_Request& req);
+
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt = {});
 

@@ -91,10 +91,6 @@ void disarm_stop_signals() {
   install(SIG_DFL);
 }
 
-void stop_point(MPI_Comm comm) {
-  int sig = g_signal;
-  MPI_Allreduce(MPI_IN_PLACE, &sig, 1, MPI_INT, MPI_MAX, comm);
-  if (sig != 0) throw StopRequested{sig};
-}
+int stop_signal() { return g_signal; }
 
 }  // namespace divcoll::mpi

@@ -110,7 +110,8 @@ struct RunConfig {
   };
   struct Output {
     std::string dir;         // directory of run files
-    int checkpoint_every{};  // generations / iterations between checkpoints
+    int checkpoint_every{};  // generations / iterations between commits of a stage's state
+    double checkpoint_interval_s{};  // least wall time between copies of the run file to its checkpoint
     bool operator==(const Output&) const = default;
   };
 

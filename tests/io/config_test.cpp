@@ -186,7 +186,8 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "analysis.dtw_norm",
                                              "analysis.cell_scale",
                                              "output.dir",
-                                             "output.checkpoint_every"};
+                                             "output.checkpoint_every",
+                                             "output.checkpoint_interval_s"};
   EXPECT_EQ(config_keys(), expected);
 }
 

@@ -182,6 +182,47 @@ signals)
   out=$(cat "$W/g.log")
   expect 143 "run.stop_grace_s = 0: stopping now"
   ;;
+checkpoint_interval)
+  # output.checkpoint_interval_s longer than the run: the run file is copied to its checkpoint only when a new
+  # run starts, at each stage's end and on a stop, and results never depend on where the copies fall
+  ST=('run.stages=["agents","connectors"]' connectors.iterations=5 run.progress_every_s=0)
+  try "$D" run "$CFG" "${ST[@]}" --out "$W/ref.h5"
+  [ "$rc" = 0 ] || fail "reference run: $out"
+  # (a) a job that exits in the connectors stage (placed by the program: after the state of its third iteration
+  # was written) resumes from the checkpoint: with copies at every commit (interval 0) that is iteration 2, with
+  # the long interval the agents stage's end
+  for interval in 0 86400; do
+    rm -f "$W/c.h5" "$W/c.h5.ckpt"
+    try env DIVCOLL_DEBUG_EXIT_IN_COMMIT=connectors:3 mpirun -np 2 "$D" run "$CFG" "${ST[@]}" \
+      output.checkpoint_interval_s=$interval --out "$W/c.h5"
+    [ "$rc" != 0 ] && grep -q "debug: exit between the state and the counter" <<< "$out" || fail "no exit at connectors:3 ($rc): $out"
+    try "$D" run "$CFG" "${ST[@]}" output.checkpoint_interval_s=$interval --out "$W/c.h5" --resume
+    [ "$rc" = 0 ] || fail "resume (interval $interval): $out"
+    grep -q "stage agents: complete in the run file" <<< "$out" || fail "interval $interval: the agents stage was redone: $out"
+    if [ "$interval" = 0 ]; then
+      grep -q "connectors: resuming after iteration 2" <<< "$out" || fail "interval 0: not resumed after iteration 2: $out"
+    else
+      ! grep -q "connectors: resuming after" <<< "$out" || fail "interval $interval: resumed inside the connectors stage: $out"
+    fi
+    "$D" compare "$W/ref.h5" "$W/c.h5" > /dev/null || fail "interval $interval: the resumed run differs"
+    echo "  interval $interval: $(grep -m1 "connectors: resuming after" <<< "$out" || echo "connectors from the start")"
+  done
+  # (b) a stop copies at the next commit whatever the interval: the checkpoint then holds the stopped run
+  try "$D" evolve "$CFG" "${EVO[@]}" --out "$W/ref2.h5"
+  [ "$rc" = 0 ] || fail "reference run: $out"
+  mpirun -np 2 "$D" evolve "$CFG" "${EVO[@]}" output.checkpoint_interval_s=86400 --out "$W/s.h5" > "$W/s.log" 2>&1 &
+  job=$!
+  await "$W/s.h5.ckpt"
+  kill -USR1 "$job"
+  wait "$job"
+  rc=$?
+  out=$(cat "$W/s.log")
+  expect 75 "stopped by SIGUSR1 right after a checkpoint"
+  "$D" compare "$W/s.h5" "$W/s.h5.ckpt" > /dev/null || fail "the stop did not copy the run file to its checkpoint"
+  try mpirun -np 3 "$D" evolve "$CFG" "${EVO[@]}" output.checkpoint_interval_s=86400 --out "$W/s.h5" --resume
+  [ "$rc" = 0 ] || fail "resume after the stop: $out"
+  "$D" compare "$W/ref2.h5" "$W/s.h5" > /dev/null || fail "the run stopped with a long interval and resumed differs"
+  ;;
 bad_outputs)
   S="$W/scene.h5"
   "$D" scene --kind pair --env flat --out "$S" > /dev/null || fail "scene"
