@@ -93,7 +93,7 @@ class AgentsPlan final : public Plan {
     mut_.springs_fixed = A_.springs_fixed;
     mut_.rest_moves = A_.rest_moves;
   }
-  Info info() const override { return {spec_.label, spec_.group, "generations_done", "generation", "agents", 0, true}; }
+  Info info() const override { return {spec_.label, spec_.group, "generations_done", "generation", "agents", 0}; }
   int rounds() const override { return A_.generations + 1; }
   std::vector<Attribute> attributes() const override { return {{"population", int64_t{P_}}}; }
   void start(int, const StoredState&) override {}  // the population of the last committed generation came with the plan

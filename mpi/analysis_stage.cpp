@@ -510,9 +510,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   const auto& D = cfg.deploy;
   const std::vector<std::string>& envs = D.environments;
   const int NP = D.pairs, R = cfg.connectors.replicates;
-  DIVCOLL_THROW_UNLESS(file.has("deploy") && file.group("deploy").has_attribute("status") &&
-                           file.group("deploy").read_string("status") == "complete",
-                       file.file() << ": the analysis stage needs a complete deploy stage");
+  DIVCOLL_THROW_UNLESS(complete(file, "deploy"), file.file() << ": the analysis stage needs a complete deploy stage");
   const std::vector<collective::Agent> agents = load_population(comm, file);
 
   // the two types among deploy's, their weights and pairs
@@ -538,9 +536,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   for (const auto& e : envs)
     if (e != "flat") novel.push_back(e);
 
-  if (!file.has("analysis")) file.create_group("analysis");
   io::h5::Node stage = file.group("analysis");
-  stage.write_string("status", "running");
   for (const char* g : {"analysis/adversity", "analysis/familiarity"})
     if (!file.has(g)) file.create_group(g);
 
@@ -575,8 +571,6 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K);
     drive(comm, cfg, file, familiarity, checkpoint);
   }
-  stage.write_string("status", "complete");
-  checkpoint();
 }
 
 }  // namespace divcoll::mpi

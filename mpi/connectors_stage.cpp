@@ -46,9 +46,7 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   const int K = static_cast<int>(kinds.size()), R = C.replicates;
   const std::vector<collective::Agent> agents = load_population(comm, file);
 
-  if (!file.has("connectors")) file.create_group("connectors");
   io::h5::Node stage = file.group("connectors");
-  stage.write_string("status", "running");
   stage.write_string("kinds", join(kinds));
   stage.write_int("replicates", R);
   store_anchors(comm, file, "agents", agents);
@@ -60,8 +58,6 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
-  stage.write_string("status", "complete");
-  checkpoint();
 }
 
 }  // namespace divcoll::mpi

@@ -56,7 +56,7 @@ class DeployPlan final : public Plan {
     diverse_pairs_ = collective::random_pairs(prng, pop_, NP_);
     uniform_pairs_ = collective::deploy_uniform_pairs(cfg);
   }
-  Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1, true}; }
+  Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
     return {{"environments", join(D_.environments)}, {"types", join(types_)}};

@@ -9,6 +9,7 @@
 
 #include <boost/serialization/utility.hpp>
 
+#include "common/check.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
 
@@ -106,10 +107,10 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const std::string& label = info.label;
   if (!file.has(info.group)) file.create_group(info.group);
   io::h5::Node group = file.group(info.group);
-  if (info.owns_stage) group.write_string("status", "running");
   for (const Attribute& a : plan.attributes()) write_attribute(file, info.group, a.name, a.value);
   write_records(comm, file, rank == 0 ? plan.setup() : Records{});
   const int R = plan.rounds(), passes = info.passes;
+  DIVCOLL_DEMAND(passes >= 1);
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
 
   // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
@@ -181,10 +182,22 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     if (!s.empty()) std::printf("%s: %s\n", label.c_str(), s.c_str());
     std::fflush(stdout);
   }
-  if (info.owns_stage) {
-    group.write_string("status", "complete");
-    checkpoint();
-  }
+}
+
+bool complete(const io::h5::Node& file, const std::string& group) {
+  return file.has(group) && file.group(group).has_attribute("status") &&
+         file.group(group).read_string("status") == "complete";
+}
+
+bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
+                     const std::function<void()>& body) {
+  if (complete(file, group)) return false;
+  if (!file.has(group)) file.create_group(group);
+  file.group(group).write_string("status", "running");
+  body();
+  file.group(group).write_string("status", "complete");
+  checkpoint();
+  return true;
 }
 
 }  // namespace divcoll::mpi

@@ -31,6 +31,15 @@ namespace divcoll::mpi {
 void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint);
 
+// a stage, or a part of one with its own status (a graded population, its agents), run with its status in
+// `group` (created if missing): nothing if the status is "complete" (returns false); else status "running",
+// body(), status "complete" and `checkpoint` (divcoll run passes a forced copy for a stage's end). The only
+// writer of status; every rank calls it
+bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
+                     const std::function<void()>& body);
+// whether `group`'s status is "complete" (every rank reads)
+bool complete(const io::h5::Node& file, const std::string& group);
+
 // writes the master's records; every rank calls it (the others' `records` are ignored)
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);
 

@@ -85,7 +85,7 @@ class EpisodesPlan final : public Plan {
       : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
         stiffness_(stiffness), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
         round_items_(std::move(round_items)), summary_(std::move(summary)) {}
-  Info info() const override { return {label_, group_, "envs_done", "environment", "episodes", 1, false}; }
+  Info info() const override { return {label_, group_, "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return static_cast<int>(envs_.size()); }
   void start(int, const StoredState&) override {}
   std::vector<std::string> items(int e) override {
@@ -145,9 +145,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   const std::vector<collective::Agent> agents = load_population(comm, file);
   const int pop = static_cast<int>(agents.size());
 
-  if (!file.has("specialists")) file.create_group("specialists");
   io::h5::Node stage = file.group("specialists");
-  stage.write_string("status", "running");
   stage.write_string("environments", join(envs));
   stage.write_int("replicates", R);
 
@@ -187,8 +185,6 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
                     cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   drive(comm, cfg, file, plan, checkpoint);
-  stage.write_string("status", "complete");
-  checkpoint();
 }
 
 namespace {
@@ -212,7 +208,7 @@ class ScalingPlan final : public Plan {
           chains_[si * 2 + 1].push_back(distinct_agents(rng, pop, S_.sizes[si]));
         }
   }
-  Info info() const override { return {"scaling", "scaling", "envs_done", "environment", "chains", 1, true}; }
+  Info info() const override { return {"scaling", "scaling", "envs_done", "environment", "chains", 1}; }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
     return {{"environments", join(cfg_.deploy.environments)}, {"variants", std::string("uniform,diverse")}};
@@ -300,9 +296,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   const std::vector<std::string>& envs = cfg.deploy.environments;
   const int R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
   const int GP = cfg.graded.population;
-  if (!file.has("graded")) file.create_group("graded");
   io::h5::Node stage = file.group("graded");
-  stage.write_string("status", "running");
   stage.write_string("environments", join(envs));
   stage.write_string("populations", "same_shape,same_shape_springs");
 
@@ -330,80 +324,72 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   const char* sources[2] = {"behaviour,springs,pairing", "behaviour,pairing"};
   for (int v = 0; v < 2; ++v) {
     const std::string base = std::string("graded/") + names[v];
-    if (!file.has(base)) file.create_group(base);
-    io::h5::Node g = file.group(base);
-    g.write_string("diversity_sources", sources[v]);
-    if (g.has_attribute("status") && g.read_string("status") == "complete") continue;
-    g.write_string("status", "running");
+    run_with_status(file, base, checkpoint, [&] {
+      file.group(base).write_string("diversity_sources", sources[v]);
 
-    // 1. the population: one body (and for v = 1 one spring genotype), rest positions fixed
-    io::RunConfig pc = cfg;
-    pc.agents.population = GP;
-    pc.agents.body_fixed = true;
-    pc.agents.rest_moves = false;
-    AgentsSpec spec;
-    spec.group = base + "/agents";
-    spec.label = std::string("graded ") + names[v];
-    spec.stream = kGradedStage + 100000 * v;
-    spec.fixed_cells = shape;
-    spec.spring_descriptor = true;
-    if (v == 1) {
-      // no evolution: GP controllers from different seeds, each with a lineage's gradient budget
-      pc.agents.springs_fixed = true;
-      pc.agents.epochs = (cfg.agents.generations + 1) * cfg.agents.epochs;
-      pc.agents.generations = 0;
-      spec.fixed_springs = springs;
-    }
-    if (!(file.has(spec.group) && file.group(spec.group).has_attribute("status") &&
-          file.group(spec.group).read_string("status") == "complete"))
-      run_agents_stage(comm, pc, file, checkpoint, spec);
-    const std::vector<collective::Agent> agents = load_population(comm, file, spec.group);
+      // 1. the population: one body (and for v = 1 one spring genotype), rest positions fixed
+      io::RunConfig pc = cfg;
+      pc.agents.population = GP;
+      pc.agents.body_fixed = true;
+      pc.agents.rest_moves = false;
+      AgentsSpec spec;
+      spec.group = base + "/agents";
+      spec.label = std::string("graded ") + names[v];
+      spec.stream = kGradedStage + 100000 * v;
+      spec.fixed_cells = shape;
+      spec.spring_descriptor = true;
+      if (v == 1) {
+        // no evolution: GP controllers from different seeds, each with a lineage's gradient budget
+        pc.agents.springs_fixed = true;
+        pc.agents.epochs = (cfg.agents.generations + 1) * cfg.agents.epochs;
+        pc.agents.generations = 0;
+        spec.fixed_springs = springs;
+      }
+      run_with_status(file, spec.group, checkpoint, [&] { run_agents_stage(comm, pc, file, checkpoint, spec); });
+      const std::vector<collective::Agent> agents = load_population(comm, file, spec.group);
 
-    // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
-    if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
-    store_anchors(comm, file, spec.group, agents);
-    std::vector<ConnectorSlot> slots;
-    for (int r = 0; r < R; ++r)
-      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
-                       base + "/connectors/weak_diverse", r});
-    TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
-                 cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
-    const auto weights = train_connectors(comm, cfg, file, agents, slots, ts, checkpoint);
-
-    // 3. agents alone and diverse pairs in every environment
-    Rng prng = make_rng(cfg.run.seed, kGradedStage + 100000 * v + 90000, 0);
-    const auto pairs = collective::random_pairs(prng, GP, NP);
-    Record dp{base + "/diverse_pairs", {static_cast<uint64_t>(NP), 2}, {}, std::vector<int32_t>{}};
-    for (int q = 0; q < NP; ++q) {
-      dp.rows.push_back(q);
-      std::get<std::vector<int32_t>>(dp.values).insert(std::get<std::vector<int32_t>>(dp.values).end(),
-                                                       {pairs[q].first, pairs[q].second});
-    }
-    write_records(comm, file, {dp});
-    auto round_items = [&](int e) {
-      std::vector<GroupEpisode> eps;
-      for (int i = 0; i < GP; ++i) eps.push_back({0, e, {i}});
+      // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
+      if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
+      store_anchors(comm, file, spec.group, agents);
+      std::vector<ConnectorSlot> slots;
       for (int r = 0; r < R; ++r)
-        for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
-      return eps;
-    };
-    auto summary = [&](int e, const std::vector<EpisodeDone>& d) {
-      const size_t n = static_cast<size_t>(R) * NP;
-      char b[256];
-      std::snprintf(b, sizeof b, "%s: alone %.2f, pairs %.2f BL", envs[e].c_str(), ok_mean(d, 0, GP).first,
-                    ok_mean(d, GP, GP + n).first);
-      return std::string(b);
-    };
-    const uint64_t uG = GP, uR = R, uN = NP;
-    EpisodesPlan plan(std::string("graded ") + names[v] + " deploy", base, agents, weights,
-                      io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
-                      {{base + "/deploy/agents", {uG}}, {base + "/deploy/pairs", {uR, uN}}}, round_items, summary);
-    drive(comm, cfg, file, plan, checkpoint);
-    g.write_string("status", "complete");
-    checkpoint();
+        slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
+                         base + "/connectors/weak_diverse", r});
+      TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
+                   cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
+      const auto weights = train_connectors(comm, cfg, file, agents, slots, ts, checkpoint);
+
+      // 3. agents alone and diverse pairs in every environment
+      Rng prng = make_rng(cfg.run.seed, kGradedStage + 100000 * v + 90000, 0);
+      const auto pairs = collective::random_pairs(prng, GP, NP);
+      Record dp{base + "/diverse_pairs", {static_cast<uint64_t>(NP), 2}, {}, std::vector<int32_t>{}};
+      for (int q = 0; q < NP; ++q) {
+        dp.rows.push_back(q);
+        std::get<std::vector<int32_t>>(dp.values).insert(std::get<std::vector<int32_t>>(dp.values).end(),
+                                                         {pairs[q].first, pairs[q].second});
+      }
+      write_records(comm, file, {dp});
+      auto round_items = [&](int e) {
+        std::vector<GroupEpisode> eps;
+        for (int i = 0; i < GP; ++i) eps.push_back({0, e, {i}});
+        for (int r = 0; r < R; ++r)
+          for (const auto& [a, b] : pairs) eps.push_back({r, e, {a, b}});
+        return eps;
+      };
+      auto summary = [&](int e, const std::vector<EpisodeDone>& d) {
+        const size_t n = static_cast<size_t>(R) * NP;
+        char b[256];
+        std::snprintf(b, sizeof b, "%s: alone %.2f, pairs %.2f BL", envs[e].c_str(), ok_mean(d, 0, GP).first,
+                      ok_mean(d, GP, GP + n).first);
+        return std::string(b);
+      };
+      const uint64_t uG = GP, uR = R, uN = NP;
+      EpisodesPlan plan(std::string("graded ") + names[v] + " deploy", base, agents, weights,
+                        io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
+                        {{base + "/deploy/agents", {uG}}, {base + "/deploy/pairs", {uR, uN}}}, round_items, summary);
+      drive(comm, cfg, file, plan, checkpoint);
+    });
   }
-  stage.write_string("status", "complete");
-  checkpoint();
 }
 
 }  // namespace divcoll::mpi

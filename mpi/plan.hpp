@@ -49,9 +49,6 @@ class Plan {
     std::string round_word = "iteration";     // progress lines
     std::string item_word = "items";          // progress lines (per second)
     int commit_every = 0;                     // rounds per commit; 0: output.checkpoint_every
-    // a stage of its own (else a part of one, e.g. connector training inside the specialists stage): the
-    // driver then sets the group's status ("running", then "complete" with a last checkpoint)
-    bool owns_stage = false;
     // farm passes per round: a round of several passes (e.g. agents alone, then pairs that use their
     // results) is counted and committed as one. The methods marked (step) get step = round · passes + pass
     int passes = 1;

@@ -25,6 +25,7 @@
 #include "evo/evolution.hpp"
 #include "evo/gd.hpp"
 #include "io/run_read.hpp"
+#include "mpi/scheduler.hpp"
 
 namespace divcoll::mpi {
 
@@ -49,16 +50,21 @@ T unpack(const std::string& bytes) {
   return v;
 }
 
-// rank 0's `value` on every rank (serialized, then broadcast); other ranks' `value` is ignored
+// rank 0's `value` on every rank (serialized, then broadcast); other ranks' `value` is ignored. The other
+// ranks usually arrive first and wait while rank 0 works between rounds: they sleep (wait_sleeping), not
+// spin in MPI_Bcast on a core that rank 0 or another job could use
 template <class T>
 T broadcast(MPI_Comm comm, const T& value) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::string bytes = rank == 0 ? pack(value) : std::string();
   int64_t n = static_cast<int64_t>(bytes.size());
-  MPI_Bcast(&n, 1, MPI_INT64_T, 0, comm);
+  MPI_Request req;
+  MPI_Ibcast(&n, 1, MPI_INT64_T, 0, comm, &req);
+  wait_sleeping(req);
   bytes.resize(static_cast<size_t>(n));
-  MPI_Bcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm);
+  MPI_Ibcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm, &req);
+  wait_sleeping(req);
   return unpack<T>(bytes);
 }
 

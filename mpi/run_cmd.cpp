@@ -110,10 +110,6 @@ void derive_run_file(const std::string& base, const std::string& path, const std
   fs::rename(tmp, path);
 }
 
-bool complete_in(const io::h5::File& f, const std::string& stage) {
-  return f.has(stage) && f.group(stage).has_attribute("status") && f.group(stage).read_string("status") == "complete";
-}
-
 // rank 0: refuses a stage that would run without its inputs. `existing`: the run file being continued
 // ("" for a new one); with --from, the base's stages before --from count as present.
 void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std::string& existing) {
@@ -122,7 +118,7 @@ void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std
     io::h5::File f = io::h5::File::open(file);
     for (const std::string& s : io::stage_names()) {
       if (s == before) break;
-      if (complete_in(f, s)) present.insert(s);
+      if (complete(f, s)) present.insert(s);
     }
   };
   if (!existing.empty()) note_complete(existing, "");
@@ -268,7 +264,7 @@ int run_session(const RunArgs& args) {
                                  << ", so their keys must be the same:" << diff);
         for (const std::string& s : sections_before(args.from))
           if (io::stage_enabled(cfg, s))
-            DIVCOLL_THROW_UNLESS(f.has(s) && f.group(s).has_attribute("status") && f.group(s).read_string("status") == "complete",
+            DIVCOLL_THROW_UNLESS(complete(f, s),
                                  "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
       }
       if (fs::exists(path) && !args.resume && !args.force)
@@ -398,15 +394,14 @@ int run_session(const RunArgs& args) {
       for (const Stage& stage : kStages) {
         const std::string name(stage.info.name);
         if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
-        if (file.has(name) && file.group(name).has_attribute("status") &&
-            file.group(name).read_string("status") == "complete") {
+        if (complete(file, name)) {
           if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
           continue;
         }
         const auto t1 = std::chrono::steady_clock::now();
         const FarmClock before = farm_clock();
-        stage.run(MPI_COMM_WORLD, cfg, file, ckpt);
-        checkpoints.force();  // a finished stage is never redone on --resume
+        // a finished stage is never redone on --resume: its end is a forced checkpoint
+        run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         // how busy each rank was (seconds computing items), gathered on every rank
         double busy = farm_clock().compute_s - before.compute_s;
@@ -425,8 +420,8 @@ int run_session(const RunArgs& args) {
         g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
         // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
         g.write_string("busy_s_per_rank_last_session", busy_text);
-        const bool complete = g.has_attribute("status") && g.read_string("status") == "complete";  // every rank reads
-        if (rank == 0 && complete)
+        const bool finished = complete(file, name);  // every rank reads
+        if (rank == 0 && finished)
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
                       name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
                       busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/check.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::io::run_file {
@@ -452,6 +453,32 @@ h5::Dims shape(std::string_view path, const std::map<std::string, hsize_t>& leng
     }
   }
   return d;
+}
+
+Layout layout(const h5::Node& root, const std::string& path, std::string_view expected_axes) {
+  Layout out;
+  out.dims = root.dims(path);
+  std::string axes;
+  {
+    h5::Handle d(H5Dopen2(root.id(), path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!d.valid() || !string_attribute(d.id(), "axes", &axes)) {
+      const Entry* e = find(path);
+      axes = e && !e->is_group() ? e->axes : "";
+    }
+  }
+  out.axes = split(axes);
+  const std::vector<std::string> want = split(expected_axes);
+  auto fail = [&](const std::string& expected) {
+    throw InputError(root.where(path) + " has the shape " + h5::dims_string(out.dims) + " (" + axes + "), expected " +
+                     expected);
+  };
+  if (out.axes != want || out.dims.size() != want.size()) fail("the axes (" + std::string(expected_axes) + ")");
+  for (size_t k = 0; k < want.size(); ++k) {
+    const Axis* a = find_axis(want[k]);
+    if (a && a->length > 0 && out.dims[k] != a->length)
+      fail(want[k] + " = " + std::to_string(a->length) + " (axis " + std::to_string(k) + ")");
+  }
+  return out;
 }
 
 std::vector<std::pair<std::string, std::string>> attributes(const h5::Node& root, const std::string& path,

@@ -77,6 +77,16 @@ void write_rows(const h5::File& file, const std::string& path, const std::map<st
   file.write_rows<T>(path, shape(path, lengths), rows, packed);
 }
 
+// the layout of dataset `path` as the file gives it: its dims, with the axis names of its `axes` attribute (a
+// file written before datasets had attributes: its schema row's). InputError naming the dataset, the axes and
+// shape expected and those found, unless its axes are `expected_axes` and each axis of fixed length (e.g.
+// connector_weight = P_c) has that length
+struct Layout {
+  std::vector<std::string> axes;
+  h5::Dims dims;
+};
+Layout layout(const h5::Node& root, const std::string& path, std::string_view expected_axes);
+
 // the string attributes a new dataset of a run file gets (axes, unit, doc, labels_<axis>); none when
 // `root` is not a run file. std::logic_error if the dataset has no row or disagrees with it (element
 // type, number of dimensions, a fixed length or the count of its labels).

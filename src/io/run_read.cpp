@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "common/check.hpp"
+#include "io/run_file.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::io {
@@ -90,23 +91,33 @@ std::vector<double> join_weights(const std::vector<std::vector<double>>& rows) {
   return flat;
 }
 
+namespace {
+
+// the rows of `<group>/params` (replicate × connector_weight) as the file lays them out; `replicates` >= 0:
+// refused unless there are that many
+h5::Dims weights_dims(const h5::Node& file, const std::string& group, int replicates) {
+  const std::string p = group + "/params";
+  DIVCOLL_THROW_UNLESS(file.has(p), file.file() << " has no " << p << ": run the stage that trains them first");
+  const run_file::Layout l = run_file::layout(file, p, "replicate,connector_weight");
+  if (replicates >= 0 && l.dims[0] != static_cast<hsize_t>(replicates))
+    throw InputError(file.where(p) + " has the shape " + h5::dims_string(l.dims) + " (replicate, connector_weight), expected " +
+                     h5::dims_string({static_cast<hsize_t>(replicates), l.dims[1]}) + ": " + std::to_string(replicates) +
+                     " replicates, as the config says");
+  return l.dims;
+}
+
+}  // namespace
+
 std::vector<std::vector<double>> read_weights(const h5::Node& file, const std::string& group, int replicates) {
-  DIVCOLL_THROW_UNLESS(file.has(group + "/params"),
-                       file.file() << " has no " << group << "/params: run the stage that trains them first");
-  const hsize_t Pc = static_cast<hsize_t>(sim::connector_param_count());
-  return split_weights(file.read<double>(group + "/params", Dims{static_cast<hsize_t>(replicates), Pc}),
-                       static_cast<size_t>(replicates));
+  const h5::Dims d = weights_dims(file, group, replicates);
+  return split_weights(file.read<double>(group + "/params", d), d[0]);
 }
 
 std::vector<double> read_weights_row(const h5::Node& file, const std::string& group, int row) {
-  Dims d;
-  const std::vector<double> w = file.read<double>(group + "/params", &d);
-  DIVCOLL_THROW_UNLESS(d.size() == 2 && d[1] == static_cast<hsize_t>(sim::connector_param_count()),
-                       group << "/params has the shape " << h5::dims_string(d) << ", not replicates × "
-                             << sim::connector_param_count());
+  const h5::Dims d = weights_dims(file, group, -1);
   DIVCOLL_THROW_UNLESS(row >= 0 && row < static_cast<int>(d[0]),
                        "--replicate = " << row << " is out of range [0, " << d[0] - 1 << "]");
-  return split_weights(w, d[0])[row];
+  return split_weights(file.read<double>(group + "/params", d), d[0])[row];
 }
 
 std::string anchors_path(const std::string& population_group) {

@@ -26,6 +26,9 @@ std::vector<evo::Individual> read_final_population(const h5::Node& file, const s
 // replicate, rows × P_c in the run file (`<group>/params`)
 std::vector<std::vector<double>> split_weights(const std::vector<double>& flat, size_t rows);
 std::vector<double> join_weights(const std::vector<std::vector<double>>& rows);
+// `<group>/params` with the layout the file gives it (run_file::layout: its axes must be replicate,
+// connector_weight and P_c long); InputError naming the dataset, the shape expected and the shape found
+// unless it also has `replicates` rows
 std::vector<std::vector<double>> read_weights(const h5::Node& file, const std::string& group, int replicates);
 // one replicate's row of `<group>/params` (any number of rows in the file; `row` checked against it)
 std::vector<double> read_weights_row(const h5::Node& file, const std::string& group, int row);

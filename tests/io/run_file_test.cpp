@@ -77,7 +77,9 @@ TEST(RunFileSchema, EveryRowIsWellFormed) {
   }
   for (const Axis& a : axes()) {
     EXPECT_TRUE(used_axes.count(a.name)) << "axis " << a.name << " is used by no dataset";
-    if (a.labels == Axis::Labels::fixed) EXPECT_GT(a.length, 0u) << a.name;
+    if (a.labels == Axis::Labels::fixed) {
+      EXPECT_GT(a.length, 0u) << a.name;
+    }
   }
 }
 
