@@ -3,8 +3,9 @@
 # jobs/run-workstation.sh): load a machine profile, resolve the run's paths, and run
 # `divcoll run CONFIG --out OUT --resume` so that it can be stopped and continued without losing work.
 #
-# Stopping. A killed run continues from its last checkpoint (OUT.ckpt, replaced after every
-# output.checkpoint_every generations or iterations) on --resume, bit-identically. divcoll itself stops right
+# Stopping. A killed run continues from its last checkpoint (OUT.ckpt, replaced at a commit every
+# output.checkpoint_every rounds once output.checkpoint_interval_s has passed since the last copy, at every
+# stage's end and on a stop) on --resume, bit-identically. divcoll itself stops right
 # after its next checkpoint on SIGTERM/SIGINT/SIGUSR1 with exit 75 (mpirun forwards only SIGUSR1; on TERM it
 # kills the ranks within a second, which loses at most the work since the last checkpoint). So on the
 # "time is nearly up" signal (SIGUSR1: Slurm's --signal=B:USR1@T, or divcoll_arm_timer under PBS) the run
