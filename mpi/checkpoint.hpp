@@ -44,7 +44,6 @@ class Checkpointer {
   io::h5::File& file_;
   std::string path_;
   double interval_s_;
-  bool copied_ = false;
   std::chrono::steady_clock::time_point last_{};
   int copies_ = 0;
   double copy_s_ = 0;

@@ -339,13 +339,6 @@ int run_session(const RunArgs& args) {
     const std::string toml = io::to_toml(cfg);
     io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
     H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
-    // every rank makes the same HDF5 calls, reads included: a collective call (an attribute or dataset
-    // written) that misses the metadata cache on some ranks only has rank 0 read the entry and broadcast
-    // it, so caches made unequal by one rank's own reads hang the run (seen: rank 0 had evicted the global
-    // heap after reading alone). DIVCOLL_DEBUG_COLLECTIVE_METADATA=1 makes every metadata read collective,
-    // so that a read made by one rank alone fails at once in the tests instead of once in a while
-    if (const char* e = std::getenv("DIVCOLL_DEBUG_COLLECTIVE_METADATA"); e && std::string(e) == "1")
-      H5Pset_all_coll_metadata_ops(fapl.id(), true);
     if (!existing) {
       // a new run file is made under a temporary name and renamed into place when its provenance is
       // written, so a file at `path` is always a complete run file (and gets a checkpoint at once)
@@ -420,8 +413,7 @@ int run_session(const RunArgs& args) {
         g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
         // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
         g.write_string("busy_s_per_rank_last_session", busy_text);
-        const bool finished = complete(file, name);  // every rank reads
-        if (rank == 0 && finished)
+        if (rank == 0)  // run_with_status has marked the stage complete
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
                       name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
                       busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);

@@ -210,9 +210,7 @@ void set_mpio(const std::string& path, bool on) {
   if (on && it == v.end()) v.push_back(path);
   if (!on && it != v.end()) v.erase(it);
 }
-}  // namespace
 
-namespace {
 bool& journal_flag() {
   static bool on = [] {
     const char* e = std::getenv("DIVCOLL_DEBUG_SYMMETRIC_IO");
