@@ -13,6 +13,7 @@
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/run_file.hpp"
 #include "io/run_read.hpp"
 #include "mpi/connectors_stage.hpp"
 #include "mpi/deploy_stage.hpp"
@@ -529,7 +530,9 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   std::array<std::vector<std::pair<int, int>>, 2> pairs;
   pairs[0] = collective::deploy_uniform_pairs(cfg);
   {
-    std::vector<int32_t> dp = file.read<int32_t>("deploy/diverse_pairs", Dims{static_cast<hsize_t>(NP), 2});
+    const std::vector<int32_t> dp = io::read_checked<int32_t>(file, "deploy/diverse_pairs", "pair,slot",
+                                                              Dims{static_cast<hsize_t>(NP), 2},
+                                                              std::to_string(NP) + " pairs, as deploy.pairs says");
     for (int q = 0; q < NP; ++q) pairs[1].emplace_back(dp[2 * q], dp[2 * q + 1]);
   }
   std::vector<std::string> novel;
@@ -543,11 +546,19 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   // adversity: deploy's results, to check the re-simulated episodes against (the master checks; every rank
   // reads, as with every read of the run file: a read made by one rank alone unbalances the ranks' HDF5
   // metadata caches, io/h5.hpp)
+  const hsize_t hE = envs.size(), hT = deploy_types.size(), hR = R, hNP = NP;
+  const Dims alone_dims{hE, static_cast<hsize_t>(agents.size())}, pairs_dims{hE, hT, hR, hNP};
+  const std::string alone_why = std::to_string(hE) + " environments × " + std::to_string(agents.size()) +
+                                " agents, as the config and the population say";
+  const std::string pairs_why = std::to_string(hE) + " environments × " + std::to_string(hT) + " types × " +
+                                std::to_string(R) + " replicates × " + std::to_string(NP) + " pairs, as the config says";
   AdversityPlan::Deployed deployed;
-  deployed.alone = file.read<double>("deploy/agents/travel_u");
-  deployed.alone_status = file.read<uint8_t>("deploy/agents/status");
-  deployed.pairs = file.read<double>("deploy/collectives/travel_u");
-  deployed.pairs_status = file.read<uint8_t>("deploy/collectives/status");
+  deployed.alone = io::read_checked<double>(file, "deploy/agents/travel_u", "env,agent", alone_dims, alone_why);
+  deployed.alone_status = io::read_checked<uint8_t>(file, "deploy/agents/status", "env,agent", alone_dims, alone_why);
+  deployed.pairs =
+      io::read_checked<double>(file, "deploy/collectives/travel_u", "env,type,replicate,pair", pairs_dims, pairs_why);
+  deployed.pairs_status =
+      io::read_checked<uint8_t>(file, "deploy/collectives/status", "env,type,replicate,pair", pairs_dims, pairs_why);
   AdversityPlan adversity(cfg, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
                           std::move(deployed));
   drive(comm, cfg, file, adversity, checkpoint);
@@ -561,11 +572,12 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     if (fam_done < static_cast<int64_t>(novel.size()))
       for (int t = 0; t < 2; ++t) {
         const std::string p = "deploy/hidden/" + kTypes[t] + "/states";
-        const Dims d = file.dims(p);
-        DIVCOLL_THROW_UNLESS(d.size() == 5 && d[0] == envs.size() && d[1] == static_cast<hsize_t>(R) &&
-                                 d[2] == static_cast<hsize_t>(NP) && d[4] == kHidden,
-                             file.file() << ": " << p << " has an unexpected shape");
-        hidden[t] = file.read<float>(p);
+        // the samples per episode (axis 3) as deploy stored them; the other axes as the config says
+        const Dims d = io::run_file::layout(file, p, "env,replicate,pair,sample,neuron").dims;
+        hidden[t] = io::read_checked<float>(file, p, "env,replicate,pair,sample,neuron", Dims{hE, hR, hNP, d[3], kHidden},
+                                            std::to_string(hE) + " environments × " + std::to_string(R) +
+                                                " replicates × " + std::to_string(NP) + " pairs × samples × " +
+                                                std::to_string(kHidden) + " neurons");
         K = static_cast<int>(d[3]);
       }
     FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K);

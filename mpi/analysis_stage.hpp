@@ -14,7 +14,7 @@
 //   Both rounds re-simulate deploy's episodes; their travel must equal deploy's bit for bit (counted in the
 //   attribute adversity/deploy_mismatches, printed if not 0).
 //   Worse / better agent: the one that travelled less / more alone in that environment. Clones (uniform pairs)
-//   tie; a tie makes the posterior agent the worse one (counted in adversity/<type>/ties).
+//   tie; a tie makes the posterior agent the worse one (not counted: for weak_uniform@uniform every pair ties).
 // Familiarity (§8.2), one round per novel environment (committed after each, familiarity_envs_done): per
 //   type and replicate, the hidden states deploy recorded in flat and in the environment (ok episodes only; at most
 //   analysis.max_states per environment, a seeded subsample), one PaCMAP fit on both together, coordinates

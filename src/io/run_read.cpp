@@ -137,8 +137,19 @@ std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents) 
   return an;
 }
 
+void check_layout(const h5::Node& file, const std::string& path, std::string_view axes, const h5::Dims& dims,
+                  const std::string& why) {
+  DIVCOLL_THROW_UNLESS(file.has(path), file.file() << " has no " << path);
+  const run_file::Layout l = run_file::layout(file, path, axes);
+  if (l.dims != dims)
+    throw InputError(file.where(path) + " has the shape " + h5::dims_string(l.dims) + " (" + std::string(axes) +
+                     "), expected " + h5::dims_string(dims) + ": " + why);
+}
+
 void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents) {
-  const std::vector<int32_t> an = file.read<int32_t>(path, Dims{static_cast<hsize_t>(agents.size()), 4});
+  const std::vector<int32_t> an =
+      read_checked<int32_t>(file, path, "agent,anchor", Dims{static_cast<hsize_t>(agents.size()), 4},
+                            std::to_string(agents.size()) + " agents in the population, 4 anchors each");
   for (size_t i = 0; i < agents.size(); ++i)
     agents[i].anchors = {an[4 * i], an[4 * i + 1], an[4 * i + 2], an[4 * i + 3]};
 }

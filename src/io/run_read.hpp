@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "collective/builders.hpp"
@@ -11,6 +12,19 @@
 #include "io/h5.hpp"
 
 namespace divcoll::io {
+
+// the layout of `path` as its file gives it (run_file::layout) checked against what the caller expects: the
+// axes `axes` (comma-separated) and the shape `dims`; InputError naming the dataset, the shape and axes
+// found and the shape expected with `why` (e.g. "13 environments × 100 agents, as deploy's config says")
+void check_layout(const h5::Node& file, const std::string& path, std::string_view axes, const h5::Dims& dims,
+                  const std::string& why);
+// `path` read after check_layout
+template <class T>
+std::vector<T> read_checked(const h5::Node& file, const std::string& path, std::string_view axes,
+                            const h5::Dims& dims, const std::string& why) {
+  check_layout(file, path, axes, dims, why);
+  return file.read<T>(path, dims);
+}
 
 // names as one comma-separated attribute value, and back
 std::string join(const std::vector<std::string>& v);
@@ -38,7 +52,7 @@ std::vector<double> read_weights_row(const h5::Node& file, const std::string& gr
 std::string anchors_path(const std::string& population_group);
 // the anchors of a population as stored (population × 4: back foot, front foot, back upper, front upper)
 std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents);
-// the stored anchors set on `agents` (which must match the dataset's row count)
+// the stored anchors set on `agents` (the dataset's layout checked: agent × anchor, one row per agent)
 void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents);
 
 }  // namespace divcoll::io

@@ -106,5 +106,29 @@ TEST(ReadWeights, OtherAxesAreRefused) {
   refused([&] { read_weights(f, "connectors/weak_diverse", 2); }, {"no connectors/weak_diverse/params"});
 }
 
+TEST(ReadAnchors, RowsSetOnTheAgentsAndAnotherPopulationRefused) {
+  // 3 agents' anchors in a run file: set on 3 agents; refused for 4 (naming both shapes), and refused where
+  // the dataset's axes say it is something else
+  const fs::path path = fs::temp_directory_path() / ("divcoll_read_anchors_" + std::to_string(::getpid()) + ".h5");
+  {
+    h5::File f = h5::File::create(path.string(), true);
+    f.write_string("format", run_file::kFormat);
+    const std::vector<int32_t> an = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+    f.write_rows<int32_t>("connectors/anchors", {3, 4}, {0, 1, 2}, an);
+    std::vector<collective::Agent> three(3), four(4);
+    read_anchors(f, "connectors/anchors", three);
+    EXPECT_EQ(three[2].anchors.back_foot, 8);
+    EXPECT_EQ(three[2].anchors.front_upper, 11);
+    refused([&] { read_anchors(f, "connectors/anchors", four); },
+            {"connectors/anchors", "(3, 4)", "expected (4, 4)", "4 agents in the population"});
+    refused([&] { check_layout(f, "connectors/anchors", "agent,anchor", {3, 5}, "why"); }, {"expected (3, 5): why"});
+    refused([&] { check_layout(f, "connectors/anchors", "env,agent", {3, 4}, "why"); },
+            {"expected the axes (env,agent)"});
+    refused([&] { check_layout(f, "connectors/none", "agent,anchor", {3, 4}, "why"); }, {"no connectors/none"});
+    f.close_quietly();
+  }
+  fs::remove(path);
+}
+
 }  // namespace
 }  // namespace divcoll::io
