@@ -11,6 +11,7 @@
 
 #include "common/check.hpp"
 #include "io/h5.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 
@@ -30,7 +31,7 @@ void agree_all(MPI_Comm comm, F&& f) {
     bad = true;
   }
   int first = bad ? rank : size;
-  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
+  allreduce_int_sleeping(comm, first, MPI_MIN);  // the others often wait here for rank 0's check
   if (first == size) return;
   int len = static_cast<int>(err.size());
   MPI_Bcast(&len, 1, MPI_INT, first, comm);
@@ -47,15 +48,6 @@ void agree_rank0(MPI_Comm comm, F&& f) {
   agree_all(comm, [&] {
     if (rank == 0) f();
   });
-}
-
-// rank 0's string on every rank
-inline std::string bcast_string(MPI_Comm comm, std::string s) {
-  int len = static_cast<int>(s.size());
-  MPI_Bcast(&len, 1, MPI_INT, 0, comm);
-  s.resize(static_cast<size_t>(len));
-  MPI_Bcast(s.data(), len, MPI_CHAR, 0, comm);
-  return s;
 }
 
 // with DIVCOLL_DEBUG_SYMMETRIC_IO=1 (io/h5.hpp): every rank has made the same HDF5 calls on the run file so
@@ -82,7 +74,7 @@ inline void check_symmetric_io(MPI_Comm comm, const char* at) {
       for (const std::string& s : j.since_check) std::fprintf(stderr, "  rank %d: %s\n", rank, s.c_str());
       std::fflush(stderr);
     }
-    MPI_Barrier(comm);
+    barrier_sleeping(comm);
   }
   throw InputError(msg() << "ranks made different HDF5 calls on the run file before " << at << ": rank 0 "
                          << all[0] << " calls, rank " << bad << " " << all[2 * bad]

@@ -189,7 +189,7 @@ bool prepare_resume(MPI_Comm comm, const std::string& run_path) {
 }
 
 void remove_checkpoint(MPI_Comm comm, const std::string& run_path) {
-  MPI_Barrier(comm);
+  barrier_sleeping(comm);
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   if (rank == 0) fs::remove(checkpoint_path(run_path));

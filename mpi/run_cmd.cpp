@@ -282,7 +282,7 @@ int run_session(const RunArgs& args) {
     // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
     // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
     arm_stop_signals(rank, cfg.run.stop_grace_s);
-    MPI_Barrier(MPI_COMM_WORLD);
+    barrier_sleeping(MPI_COMM_WORLD);
     // one writer per run file: taken before anything is written (the lock also covers the checkpoint)
     std::string note;
     agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
@@ -357,12 +357,12 @@ int run_session(const RunArgs& args) {
         fresh.write_string("hostname", host);
         fresh.close();
       }
-      MPI_Barrier(MPI_COMM_WORLD);
+      barrier_sleeping(MPI_COMM_WORLD);
       if (rank == 0) {
         fs::remove(checkpoint_path(path));
         fs::rename(tmp, path);
       }
-      MPI_Barrier(MPI_COMM_WORLD);
+      barrier_sleeping(MPI_COMM_WORLD);
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
@@ -422,7 +422,7 @@ int run_session(const RunArgs& args) {
       // every rank is here, right after the same checkpoint: the file is closed normally
       disarm_stop_signals();
       file.close();
-      MPI_Barrier(MPI_COMM_WORLD);
+      barrier_sleeping(MPI_COMM_WORLD);
       lock.release();
       if (rank == 0)
         std::printf("divcoll: stopped by %s right after a checkpoint; %s holds every finished step: continue with "
@@ -435,7 +435,7 @@ int run_session(const RunArgs& args) {
     file.write_string("end_time", now_iso());
     file.close();
     remove_checkpoint(MPI_COMM_WORLD, path);
-    MPI_Barrier(MPI_COMM_WORLD);
+    barrier_sleeping(MPI_COMM_WORLD);
     lock.release();
     if (rank == 0) std::printf("done: %s\n", path.c_str());
   } catch (const InputError& e) {

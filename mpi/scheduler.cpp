@@ -494,6 +494,18 @@ void wait_sleeping(MPI_Request& req) {
   }
 }
 
+void barrier_sleeping(MPI_Comm comm) {
+  MPI_Request req;
+  MPI_Ibarrier(comm, &req);
+  wait_sleeping(req);
+}
+
+void allreduce_int_sleeping(MPI_Comm comm, int& value, MPI_Op op) {
+  MPI_Request req;
+  MPI_Iallreduce(MPI_IN_PLACE, &value, 1, MPI_INT, op, comm, &req);
+  wait_sleeping(req);
+}
+
 FarmClock& farm_clock() {
   static FarmClock clock;
   return clock;

@@ -15,6 +15,7 @@
 #include <functional>
 #include <string>
 #include <vector>
+#include "mpi/wait.hpp"  // wait_sleeping, for the stages that wait on their own broadcasts
 
 namespace divcoll::mpi {
 
@@ -56,9 +57,6 @@ struct FarmClock {
 };
 FarmClock& farm_clock();
 
-// waits for a non-blocking MPI request without spinning on the core (sleeps 20 µs doubling to 2 ms between
-// tests): for collectives where some ranks wait while another works
-void wait_sleeping(MPI_Request& req);
 
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt = {});

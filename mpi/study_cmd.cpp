@@ -18,6 +18,7 @@
 #include "io/config.hpp"
 #include "io/h5.hpp"
 #include "mpi/run_cmd.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -316,7 +317,7 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
       }
       std::error_code ec;
       if (rank == 0) fs::create_directories(dir, ec);
-      MPI_Barrier(MPI_COMM_WORLD);
+      barrier_sleeping(MPI_COMM_WORLD);
       DIVCOLL_THROW_UNLESS(fs::is_directory(dir), "cannot create the study folder " << dir);
       if (rank == 0) write_manifest(dir, manifest(s, runs, status, wall));
     } catch (const InputError& e) {
