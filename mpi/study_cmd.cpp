@@ -17,6 +17,7 @@
 #include "common/check.hpp"
 #include "io/config.hpp"
 #include "io/h5.hpp"
+#include "mpi/agree.hpp"
 #include "mpi/run_cmd.hpp"
 #include "mpi/wait.hpp"
 
@@ -32,6 +33,7 @@ struct Variant {
 
 struct Study {
   std::string name, doc, base, text;  // base: absolute path of the run config; text: the study file
+  std::string base_given;             // study.base as resolved from the study file (base may be the folder's copy)
   std::vector<std::uint64_t> seeds;
   std::vector<std::string> scale;
   std::vector<Variant> variants;
@@ -100,6 +102,7 @@ Study parse_study(const std::string& path) {
   const std::string base = text_of(*st->get("base"), "study.base");
   s.base = fs::absolute(fs::path(path).parent_path() / base).lexically_normal().string();
   DIVCOLL_THROW_UNLESS(fs::is_regular_file(s.base), "study.base: no config file " << s.base);
+  s.base_given = s.base;
   if (st->contains("scale")) s.scale = strings(*st->get("scale"), "study.scale");
   const toml::array* seeds = st->get("seeds")->as_array();
   DIVCOLL_THROW_UNLESS(seeds && !seeds->empty(), "study.seeds must be a non-empty list of integers >= 0");
@@ -189,6 +192,10 @@ std::vector<PlannedRun> plan(const Study& s) {
   return runs;
 }
 
+// the run config as the study started with it, copied into the study folder: every run, resumed ones too,
+// reads this copy, so a study is not changed half way by an edit of the config file (or a newer checkout)
+constexpr const char* kBaseCopy = "base.toml";
+
 // the manifest DIR/study.toml
 toml::table manifest(const Study& s, const std::vector<PlannedRun>& runs, const std::vector<std::string>& status,
                      const std::vector<double>& wall) {
@@ -217,7 +224,8 @@ toml::table manifest(const Study& s, const std::vector<PlannedRun>& runs, const 
   return toml::table{{"format", "divcoll-study"},
                      {"name", s.name},
                      {"doc", s.doc},
-                     {"base", s.base},
+                     {"base", s.base_given},
+                     {"base_copy", std::string(kBaseCopy)},
                      {"seeds", seeds},
                      {"scale", scale},
                      {"variant", vars},
@@ -271,6 +279,14 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
     // everything that can be refused is refused here, on every rank alike, before any run starts
     try {
       s = parse_study(args.study);
+      // a study being resumed reads the config it started with (its folder's copy)
+      const fs::path copy = fs::path(dir) / kBaseCopy;
+      if (!args.plan && args.resume && fs::exists(fs::path(dir) / "study.toml") && fs::is_regular_file(copy)) {
+        if (rank == 0 && read_text(copy.string()) != read_text(s.base))
+          std::printf("study: %s has changed since the study started; its runs go on with the copy it started "
+                      "with, %s\n", s.base.c_str(), copy.string().c_str());
+        s.base = copy.string();
+      }
       runs = plan(s);
       status.assign(runs.size(), "planned");
       wall.assign(runs.size(), 0.0);
@@ -319,7 +335,16 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
       if (rank == 0) fs::create_directories(dir, ec);
       barrier_sleeping(MPI_COMM_WORLD);
       DIVCOLL_THROW_UNLESS(fs::is_directory(dir), "cannot create the study folder " << dir);
-      if (rank == 0) write_manifest(dir, manifest(s, runs, status, wall));
+      agree_rank0(MPI_COMM_WORLD, [&] {  // a failure on rank 0 stops every rank here
+        if (!fs::exists(copy)) {
+          const std::string text = read_text(s.base);
+          std::ofstream out(copy, std::ios::binary);
+          out << text;
+          DIVCOLL_THROW_UNLESS(out.good(), "cannot write " << copy.string());
+        }
+        write_manifest(dir, manifest(s, runs, status, wall));
+      });
+      s.base = copy.string();
     } catch (const InputError& e) {
       if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
       MPI_Finalize();

@@ -18,6 +18,8 @@
 // any work. Runs go seed by seed, each seed's variants in file order; the base of a run is the earlier
 // variant of the same seed that shares the most leading stages (the earliest on a tie).
 //
+// DIR/base.toml is the run config as the study started: every run reads it, resumed runs too, so an edit of
+// the config file (or a newer checkout) does not change a study half way.
 // DIR/study.toml is the manifest: the study file's text, and per run its variant, seed, path, the stage it
 // was computed from and the run it reused (empty: computed from scratch), and its status. `--resume`
 // continues a killed study (the study file must be unchanged) and gives the same run files; without it an

@@ -2,7 +2,8 @@
 # `divcoll study` on configs/studies/tiny.toml (2 variants x 2 seeds at the tiny preset, the second variant
 # differs only in a deploy key): the runs that reuse earlier stages hold them bit for bit and did not
 # recompute them, and equal a run made from scratch; a study killed (SIGKILL) while it runs and resumed with
-# another rank count gives the same run files; the robustness page lists every claim x variant cell; a bad
+# another rank count gives the same run files, even when the base config file was edited in between (the
+# study reads the copy it started with); the robustness page lists every claim x variant cell; a bad
 # study file is refused before any work. Usage: study_test.sh DIVCOLL SOURCE_DIR
 set -euo pipefail
 D=$1 SRC=$2
@@ -42,11 +43,18 @@ if grep -qE "^(agents|connectors): " "$W/run4.log"; then fail "run 4 recomputed 
 echo "reuse: ok"
 
 echo "== killed and resumed"
+# trial 1 runs a copy of the study whose base config is a copy of tiny.toml, edited between the kill and the
+# resume: the resumed runs must read the config the study started with (the folder's base.toml)
+mkdir -p "$W/s1"
+cp "$SRC/configs/tiny.toml" "$W/s1/tiny.toml"
+sed 's|base = "../tiny.toml"|base = "tiny.toml"|' "$STUDY" > "$W/s1/study.toml"
 for trial in 1 2; do
   rm -rf "$W/k"
+  st=$STUDY
+  [ "$trial" = 1 ] && st=$W/s1/study.toml
   # trial 1 is killed while run 2 (derived from run 1) computes, trial 2 while run 3 (from scratch) does
   at=$((trial + 1))
-  "$D" study "$STUDY" --out "$W/k" > "$W/k.log" 2>&1 &
+  "$D" study "$st" --out "$W/k" > "$W/k.log" 2>&1 &
   job=$!
   for _ in $(seq 1 1200); do
     grep -q "^study: run $at/4" "$W/k.log" 2>/dev/null && break
@@ -61,9 +69,16 @@ for trial in 1 2; do
   fi
   echo "trial $trial: killed during run $at"
   # refused without --resume, continued with it (another rank count)
-  if "$D" study "$STUDY" --out "$W/k" > "$W/k2.log" 2>&1; then fail "an existing study was continued without --resume"; fi
+  if "$D" study "$st" --out "$W/k" > "$W/k2.log" 2>&1; then fail "an existing study was continued without --resume"; fi
   grep -q "pass --resume" "$W/k2.log" || fail "the refusal does not say --resume"
-  mpirun -np 2 "$D" study "$STUDY" --out "$W/k" --resume > "$W/k2.log" 2>&1 || { cat "$W/k2.log"; fail "resume failed"; }
+  cmp -s "$W/k/base.toml" "$SRC/configs/tiny.toml" || fail "trial $trial: base.toml is not the config the study started with"
+  # trial 1: the config file is edited (fewer deployed pairs) before the resume
+  [ "$trial" = 1 ] && sed -i 's/^pairs = 4 /pairs = 3 /' "$W/s1/tiny.toml"
+  mpirun -np 2 "$D" study "$st" --out "$W/k" --resume > "$W/k2.log" 2>&1 || { cat "$W/k2.log"; fail "resume failed"; }
+  if [ "$trial" = 1 ]; then
+    grep -q "has changed since the study started; its runs go on with the copy" "$W/k2.log" \
+      || fail "trial 1: the resume does not say that the config file changed"
+  fi
   for f in baseline/seed1.h5 baseline/seed2.h5 long_deploy/seed1.h5 long_deploy/seed2.h5; do
     "$D" compare "$W/a/$f" "$W/k/$f" > /dev/null || fail "trial $trial: $f differs after kill and resume"
   done
