@@ -39,6 +39,18 @@ def fmt(x):
     return "—" if not np.isfinite(x) else f"{x:.3f}"
 
 
+def busy_text(attrs):
+    """a stage's last session as its timing attributes give it: ranks, the share of rank-time computing items,
+    rank 0's share, and max / mean busy seconds over ranks"""
+    busy = [float(x) for x in _s(attrs.get("busy_s_per_rank_last_session", "")).split(",") if x.strip()]
+    wall = float(attrs.get("wall_s_last_session", float("nan")))
+    if not busy or not wall > 0:
+        return "–"
+    n = len(busy)
+    return (f"{n}, {100 * sum(busy) / (n * wall):.0f}%, {100 * busy[0] / wall:.0f}%, "
+            f"{max(busy) / np.mean(busy):.2f}" if np.mean(busy) > 0 else f"{n}, 0%, 0%, –")
+
+
 def summarize(path):
     lines = []
     w = lines.append
@@ -47,12 +59,15 @@ def summarize(path):
         w(f"commit {_s(f.attrs.get('git_commit', '?'))}, seed {_s(f.attrs.get('seed', '?'))}, "
           f"ranks {_s(f.attrs.get('ranks', '?'))}, started {_s(f.attrs.get('start_time', '?'))}, "
           f"ended {_s(f.attrs.get('end_time', '(not finished)'))}\n")
-        w("| stage | status | wall time (s, summed over sessions) |\n|---|---|---|")
+        w("| stage | status | wall time (s, summed over sessions) | last session: ranks, busy share, master busy, "
+          "imbalance (max / mean busy) |\n|---|---|---|---|")
         for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]:
             if st in f:
                 g = f[st]
                 wall = g.attrs.get("wall_s", g.attrs.get("wall_s_last_session", float("nan")))
-                w(f"| {st} | {_s(g.attrs.get('status', '?'))} | {float(wall):.0f} |")
+                wall = float(wall)
+                w(f"| {st} | {_s(g.attrs.get('status', '?'))} | {wall:{'.0f' if wall >= 100 else '.1f'}} | "
+                  f"{busy_text(g.attrs)} |")
         w("")
         if "agents/final" in f:
             fit = f["agents/final/fitness"][()]

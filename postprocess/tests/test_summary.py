@@ -118,5 +118,17 @@ class SmallRunTest(SummaryTest):
         self.assertEqual(next(val for k, val in got.items() if k.startswith("Trained agents travel"))[0], "not measured")
 
 
+class StageTimingTest(unittest.TestCase):
+    """the stage table's last-session column: ranks, busy share of rank-time, rank 0's share, max / mean busy"""
+
+    def test_busy_shares_and_imbalance_from_the_attributes(self):
+        attrs = {"wall_s_last_session": 10.0, "busy_s_per_rank_last_session": "9,6"}
+        self.assertEqual(summary.busy_text(attrs), "2, 75%, 90%, 1.20")
+
+    def test_a_stage_without_timing_says_so(self):
+        self.assertEqual(summary.busy_text({}), "–")
+        self.assertEqual(summary.busy_text({"wall_s_last_session": 0.0, "busy_s_per_rank_last_session": "1"}), "–")
+
+
 if __name__ == "__main__":
     unittest.main()
