@@ -13,6 +13,7 @@
 #include "mpi/agree.hpp"
 #include "mpi/scheduler.hpp"
 #include "mpi/stop.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 namespace fs = std::filesystem;

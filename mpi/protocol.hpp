@@ -26,6 +26,7 @@
 #include "evo/gd.hpp"
 #include "io/run_read.hpp"
 #include "mpi/scheduler.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 

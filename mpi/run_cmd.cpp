@@ -33,6 +33,7 @@
 #include "mpi/driver.hpp"
 #include "mpi/scheduler.hpp"
 #include "mpi/stop.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 namespace {

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "mpi/protocol.hpp"
+#include "mpi/wait.hpp"
 
 namespace divcoll::mpi {
 namespace {

@@ -15,7 +15,6 @@
 #include <functional>
 #include <string>
 #include <vector>
-#include "mpi/wait.hpp"  // wait_sleeping, for the stages that wait on their own broadcasts
 
 namespace divcoll::mpi {
 
@@ -56,7 +55,6 @@ struct FarmClock {
   double task_bytes = 0, result_bytes = 0;
 };
 FarmClock& farm_clock();
-
 
 FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
                 const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt = {});
