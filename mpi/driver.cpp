@@ -99,6 +99,11 @@ void write_attribute(const io::h5::File& file, const std::string& group, const s
 
 }  // namespace
 
+DriverClock& driver_clock() {
+  static DriverClock clock;
+  return clock;
+}
+
 void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint) {
   int rank = 0;
@@ -142,6 +147,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   };
 
   const auto t_stage = std::chrono::steady_clock::now();
+  DriverClock& clock = driver_clock();
   double last_print = -1e9;
   const int end = R + (plan.closing_round() ? 1 : 0);
   for (int r = done; r < end; ++r) {
@@ -149,8 +155,16 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     size_t n_items = 0;
     for (int pass = 0; pass < passes; ++pass) {
       const int step = r * passes + pass;
+      auto tp = std::chrono::steady_clock::now();
+      auto lap = [&](double& into) {
+        const auto now = std::chrono::steady_clock::now();
+        into += std::chrono::duration<double>(now - tp).count();
+        tp = now;
+      };
       plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
+      lap(clock.input_s);
       const std::vector<std::string> items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
+      lap(clock.items_s);
       n_items += items.size();
       FarmOptions fo;
       fo.on_result = [&](int64_t i, const std::string& bytes) { plan.reduce(step, i, bytes); };
@@ -164,11 +178,18 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
         }
       };
       farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
+      lap(clock.farm_s);
       write_records(comm, file, rank == 0 ? plan.end_round(step) : Records{});
+      lap(clock.writes_s);
     }
+    ++clock.rounds;
     if (r >= R) continue;  // the closing round: recorded, not counted
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
-    if ((r + 1) % every == 0 || r + 1 == R) commit(r + 1);
+    if ((r + 1) % every == 0 || r + 1 == R) {
+      const auto tc = std::chrono::steady_clock::now();
+      commit(r + 1);
+      clock.commits_s += since(tc);
+    }
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
       std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(), r + 1, R,

@@ -394,6 +394,7 @@ int run_session(const RunArgs& args) {
         }
         const auto t1 = std::chrono::steady_clock::now();
         const FarmClock before = farm_clock();
+        const DriverClock dbefore = driver_clock();
         // a finished stage is never redone on --resume: its end is a forced checkpoint
         run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
@@ -414,10 +415,25 @@ int run_session(const RunArgs& args) {
         g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
         // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
         g.write_string("busy_s_per_rank_last_session", busy_text);
-        if (rank == 0)  // run_with_status has marked the stage complete
+        // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
+        const DriverClock& dc = driver_clock();
+        const double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
+                                  dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
+        double serial_b[4] = {serial[0], serial[1], serial[2], serial[3]};
+        MPI_Bcast(serial_b, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        char serial_text[160];
+        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial_b[0],
+                      serial_b[1], serial_b[2], serial_b[3]);
+        g.write_string("master_serial_s_last_session", serial_text);
+        if (rank == 0) {  // run_with_status has marked the stage complete
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
                       name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
                       busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
+          std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
+                      "commits %.2f s)\n",
+                      name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
+                      serial[0], serial[1], serial[2], serial[3]);
+        }
       }
     } catch (const StopRequested& stop) {
       // every rank is here, right after the same checkpoint: the file is closed normally

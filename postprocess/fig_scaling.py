@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Table and plot of a scaling benchmark (jobs/bench-scaling.sh): wall time per stage against ranks,
-speed-up, each stage's busy fraction (in all, and of each rank: seconds computing items / wall seconds)
-and load imbalance, read from OUT/run_np<N>.h5.
+speed-up, each stage's busy fraction (in all, and of each rank: seconds computing items / wall seconds),
+load imbalance and the master's serial seconds (its time outside the farm while the workers wait: the rounds'
+inputs, items, writes and commits; runs made before the attribute existed show none), read from
+OUT/run_np<N>.h5.
 
     /usr/bin/python3 postprocess/fig_scaling.py OUT [--cores C]
 
@@ -28,6 +30,18 @@ def _s(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
+def parse_serial(text):
+    """'input=0.1,items=0.0,writes=0.2,commits=0.0' -> {name: seconds} ({} when absent or unreadable)"""
+    out = {}
+    for part in _s(text).split(","):
+        name, _, value = part.partition("=")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            return {}
+    return out if any(out) else {}
+
+
 def read(out):
     rows = []
     for path in glob.glob(os.path.join(out, "run_np*.h5")):
@@ -39,11 +53,13 @@ def read(out):
                 g = f[st]
                 busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
                 wall = float(g.attrs["wall_s_last_session"])
+                serial = parse_serial(g.attrs.get("master_serial_s_last_session", ""))
                 rows.append(dict(ranks=n, stage=st, wall_s=wall,
                                  rank_busy=[b / wall for b in busy] if wall > 0 else [],
                                  busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
                                  master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
-                                 imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan")))
+                                 imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan"),
+                                 serial_s=sum(serial.values()) if serial else float("nan")))
     return sorted(rows, key=lambda r: (r["ranks"], STAGES.index(r["stage"])))
 
 
@@ -57,10 +73,10 @@ def main(argv=None):
         print(f"fig_scaling: no run_np<N>.h5 with stage timings in {a.out}", file=sys.stderr)
         return 2
     with open(os.path.join(a.out, "scaling.csv"), "w") as fh:
-        fh.write("ranks,stage,wall_s,busy_fraction,master_busy,imbalance,busy_per_rank\n")
+        fh.write("ranks,stage,wall_s,busy_fraction,master_busy,imbalance,master_serial_s,busy_per_rank\n")
         for r in rows:
             fh.write(f"{r['ranks']},{r['stage']},{r['wall_s']:.3f},{r['busy_fraction']:.3f},{r['master_busy']:.3f},"
-                     f"{r['imbalance']:.3f},{' '.join(f'{b:.3f}' for b in r['rank_busy'])}\n")
+                     f"{r['imbalance']:.3f},{r['serial_s']:.3f},{' '.join(f'{b:.3f}' for b in r['rank_busy'])}\n")
     ranks = sorted({r["ranks"] for r in rows})
     stages = [s for s in STAGES if any(r["stage"] == s for r in rows)]
     wall = {(r["ranks"], r["stage"]): r for r in rows}
@@ -77,8 +93,9 @@ def main(argv=None):
             elif (n, st) in wall:
                 r = wall[(n, st)]
                 speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f})" if (ranks[0], st) in wall and n != ranks[0] else ""
+                serial = f", serial {r['serial_s']:.2f} s" if np.isfinite(r["serial_s"]) else ""
                 cells.append(f"{r['wall_s']:.1f} s{speed}, busy {r['busy_fraction']:.0%} (per rank "
-                             f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}")
+                             f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}{serial}")
             else:
                 cells.append("—")
         md.append(f"| {st} | " + " | ".join(cells) + " |")
