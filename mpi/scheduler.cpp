@@ -35,8 +35,8 @@ double thread_cpu_s() {
 class Backoff {
  public:
   void reset() { us_ = kMinUs; }
-  std::chrono::microseconds next() {
-    const int us = us_;
+  std::chrono::microseconds next(int max_us = kMaxUs) {
+    const int us = std::min(us_, max_us);
     us_ = std::min(2 * us_, kMaxUs);
     return std::chrono::microseconds(us);
   }
@@ -224,6 +224,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   // hands worker w its next block, or tells it the round is over (once)
   Sender sender(comm);
   std::vector<char> ended(size, 0);
+  std::vector<int> held(size, 0);  // blocks handed to each worker whose results have not come back
   int open_workers = size - 1;
   auto give = [&](int w) {
     const auto t0 = Clock::now();
@@ -231,6 +232,9 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     {
       std::lock_guard lk(sh.mu);
       const int64_t left = n - next;
+      // the round's tail (blocks of one item): a worker gets its next item only once it has none left, so
+      // that no item waits in one worker's queue while another rank, the master too, has nothing to do
+      if (left > 0 && left <= 4 * computing && held[w] > 0 && opt.block <= 0) return;
       if (left > 0) {
         const int64_t guided = (left + 4 * computing - 1) / (4 * computing);
         count = std::min(left, opt.block > 0 ? int64_t{opt.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt.max_block)));
@@ -239,6 +243,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       }
     }
     if (count > 0) {
+      ++held[w];
       std::fill(out.owner.begin() + first, out.owner.begin() + first + count, w);
       std::string buf = pack_block(first, items.data() + first, count);
       clock.task_bytes += static_cast<double>(buf.size());
@@ -324,6 +329,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       const auto t0 = Clock::now();
       receiver.receive(msg, st);
       clock.result_s += seconds_since(t0);
+      --held[st.MPI_SOURCE];
       give(st.MPI_SOURCE);
     }
     for (const auto& m : receiver.take()) {
@@ -366,7 +372,10 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       backoff.reset();
     } else {
       std::unique_lock lk(sh.mu);
-      sh.to_server.wait_for(lk, backoff.next(), [&] { return local_new > 0 || sh.error || (!local_running && running); });
+      // in the round's tail a worker waits for its next item: look every 200 µs rather than every 2 ms
+      const bool tail = next < n && n - next <= 4 * computing;
+      sh.to_server.wait_for(lk, backoff.next(tail ? 200 : 2000),
+                            [&] { return local_new > 0 || sh.error || (!local_running && running); });
     }
   }
   if (local.joinable()) local.join();

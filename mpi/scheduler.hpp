@@ -28,7 +28,9 @@ struct FarmOptions {
   // a block's results come back in one message. Results never depend on it.
   int block = 0;
   int max_block = 64;
-  // blocks a worker holds at once (one computing, the others queued)
+  // blocks a worker holds at once (one computing, the others queued). In a round's tail (no more items left
+  // than 4 per computing rank, automatic blocks) a worker holds one item at a time and gets the next when its
+  // result comes back, so that no item waits in one worker's queue while another rank has nothing to do
   int depth = 2;
   // called on the master, in item order, as soon as items 0..i all have results (from farm()'s calling
   // thread, while later items are still being computed): lets the caller fold results during the round
