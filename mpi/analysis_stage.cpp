@@ -59,23 +59,24 @@ void serialize(Ar& ar, PairDone& d, unsigned) {
   ar & d.travel_u & d.status & d.dtw;
 }
 
-// familiarity: one PaCMAP fit of a replicate's training and novel hidden states
+// familiarity: one PaCMAP fit of a replicate's training and novel hidden states. The task names the fit;
+// the rank that computes it samples the states from its own copy of deploy's hidden states (every rank
+// reads them), so a task is a few bytes rather than up to 2 × max_states × 32 floats
 struct FitTask {
-  uint64_t seed = 0;
-  int32_t n_train = 0, n_novel = 0;
-  std::vector<float> states;  // (n_train + n_novel) × 32, training first
+  int32_t novel = 0, type = 0, replicate = 0;  // novel environment (index into the novel list), type, replicate
 };
 template <class Ar>
 void serialize(Ar& ar, FitTask& t, unsigned) {
-  ar & t.seed & t.n_train & t.n_novel & t.states;
+  ar & t.novel & t.type & t.replicate;
 }
 struct FitDone {
-  std::vector<int64_t> counts;  // 6
-  std::vector<float> embedding;  // (n_train + n_novel) × 2
+  int32_t n_train = 0, n_novel = 0;  // the states of the fit, training first
+  std::vector<int64_t> counts;       // 6
+  std::vector<float> embedding;      // (n_train + n_novel) × 2
 };
 template <class Ar>
 void serialize(Ar& ar, FitDone& d, unsigned) {
-  ar & d.counts & d.embedding;
+  ar & d.n_train & d.n_novel & d.counts & d.embedding;
 }
 
 bool same_bits(double x, double y) { return (std::isnan(x) && std::isnan(y)) || x == y; }
@@ -388,42 +389,36 @@ class FamiliarityPlan final : public Plan {
     }
   }
   std::vector<std::string> items(int k) override {
-    const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
     std::vector<std::string> items;
-    for (int t = 0; t < 2; ++t)
-      for (int r = 0; r < R_; ++r) {
-        const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R_ + r;
-        Rng srng = make_rng(cfg_.run.seed, kAnalysisStage + 1, item);
-        FitTask task;
-        task.seed = seed_for(cfg_.run.seed, kAnalysisStage + 2, item);
-        task.states = states_of(hidden_[t], e_flat_, r, R_, NP_, K_, A_.max_states, srng);
-        const std::vector<float> nov = states_of(hidden_[t], ei, r, R_, NP_, K_, A_.max_states, srng);
-        task.n_train = static_cast<int32_t>(task.states.size() / kHidden);
-        task.n_novel = static_cast<int32_t>(nov.size() / kHidden);
-        task.states.insert(task.states.end(), nov.begin(), nov.end());
-        const size_t row = static_cast<size_t>(k) * R_ + r;
-        ns_[t][2 * row] = task.n_train;
-        ns_[t][2 * row + 1] = task.n_novel;
-        items.push_back(pack(task));
-      }
+    for (int32_t t = 0; t < 2; ++t)
+      for (int32_t r = 0; r < R_; ++r) items.push_back(pack(FitTask{k, t, r}));
     done_.assign(items.size(), {});
     return items;
   }
   std::string compute(const std::string& bytes) override {
     const FitTask task = unpack<FitTask>(bytes);
-    const int n = task.n_train + task.n_novel;
+    const int k = task.novel, t = task.type, r = task.replicate;
+    const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
+    const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R_ + r;
+    Rng srng = make_rng(cfg_.run.seed, kAnalysisStage + 1, item);
+    std::vector<float> states = states_of(hidden_[t], e_flat_, r, R_, NP_, K_, A_.max_states, srng);
+    const std::vector<float> nov = states_of(hidden_[t], ei, r, R_, NP_, K_, A_.max_states, srng);
     FitDone d;
+    d.n_train = static_cast<int32_t>(states.size() / kHidden);
+    d.n_novel = static_cast<int32_t>(nov.size() / kHidden);
+    states.insert(states.end(), nov.begin(), nov.end());
+    const int n = d.n_train + d.n_novel;
     d.counts.assign(6, 0);
-    if (task.n_train < 1 || task.n_novel < 1 || n < 4) {
+    if (d.n_train < 1 || d.n_novel < 1 || n < 4) {
       d.embedding.assign(static_cast<size_t>(n) * 2, std::numeric_limits<float>::quiet_NaN());
       return pack(d);
     }
-    std::vector<double> X(task.states.begin(), task.states.end());
+    std::vector<double> X(states.begin(), states.end());
     analysis::PacmapOptions po;
-    po.seed = task.seed;
+    po.seed = seed_for(cfg_.run.seed, kAnalysisStage + 2, item);
     const std::vector<double> y = analysis::pacmap_fit(X.data(), n, kHidden, po);
     std::vector<uint8_t> label(n, 0);
-    std::fill(label.begin() + task.n_train, label.end(), 1);
+    std::fill(label.begin() + d.n_train, label.end(), 1);
     std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
     if (A_.cell_scale != 1.0)
       for (double& c : cells) c *= A_.cell_scale;
@@ -433,7 +428,12 @@ class FamiliarityPlan final : public Plan {
     d.embedding.assign(y.begin(), y.end());
     return pack(d);
   }
-  void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<FitDone>(bytes); }
+  void reduce(int k, int64_t i, const std::string& bytes) override {
+    done_[i] = unpack<FitDone>(bytes);
+    const size_t row = static_cast<size_t>(k) * R_ + i % R_;  // item i is type i / R, replicate i % R
+    ns_[i / R_][2 * row] = done_[i].n_train;
+    ns_[i / R_][2 * row + 1] = done_[i].n_novel;
+  }
   Records end_round(int k) override {
     const hsize_t hEN = EN_, hR = R_, hS = 2 * static_cast<hsize_t>(A_.max_states);
     Records out;
@@ -564,7 +564,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
   drive(comm, cfg, file, adversity, checkpoint);
 
   // familiarity: flat's hidden states against each novel environment's (every rank reads them while
-  // rounds are left; the master's plan uses them)
+  // rounds are left: the rank that computes a fit samples its states)
   if (std::find(envs.begin(), envs.end(), "flat") != envs.end() && !novel.empty()) {
     std::array<std::vector<float>, 2> hidden;
     int K = 0;
