@@ -159,9 +159,10 @@ def scale_section(run):
         verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** This page reports "
                    f"the run file `{os.path.basename(run)}` only; it is not the paper-scale report. Claims are judged "
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
-                   "the count that is short. The paper-scale report is pending: it needs one run file of "
-                   "`configs/paper.toml` with every stage (hours on 2 cores); the README gives the paper-scale "
-                   "numbers measured so far, from separate runs described there.")
+                   "the count that is short. The paper-scale report, from one run file of `configs/paper.toml` with "
+                   "every stage (seed 1, 2 h 20 min on 2 cores), is in the repository at "
+                   "`postprocess/gallery/paper_seed1/report.md`; the README's \"Results at paper scale\" "
+                   "summarises it.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
     out = [verdict, "", "| count | config key | this run | paper |", "|---|---|---|---|"]

@@ -167,7 +167,8 @@ class EndToEnd(unittest.TestCase):
         self.assertIn("report.html", stdout)
         self.assertIn("Preset <code>tiny</code>", text)
         self.assertIn("too small to judge", text)
-        self.assertIn("paper-scale report is pending", text)
+        self.assertIn("paper-scale report, from one run file of <code>configs/paper.toml</code>", text)
+        self.assertIn("postprocess/gallery/paper_seed1/report.md", text)
         self.assertIn("<video controls", text)
         self.assertNotRegex(text, r'src="https?://')  # nothing from the network
         try:
