@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -12,8 +13,13 @@
 #include "collective/builders.hpp"
 
 namespace divcoll::testing {
-inline std::string shared_dir() { return DIVCOLL_SHARED_DIR; }
-inline std::string parity_dir() { return std::string(DIVCOLL_SHARED_DIR) + "/testdata/parity"; }
+// the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
+// else the CMake cache variable of the same name (default: ../shared beside the checkout)
+inline std::string shared_dir() {
+  const char* e = std::getenv("DIVCOLL_SHARED_DIR");
+  return e && *e ? std::string(e) : std::string(DIVCOLL_SHARED_DIR);
+}
+inline std::string parity_dir() { return shared_dir() + "/testdata/parity"; }
 inline std::string source_dir() { return DIVCOLL_SOURCE_DIR; }
 inline std::string divcoll_binary() { return DIVCOLL_BINARY; }
 // the text of README.md ("" if it cannot be read)

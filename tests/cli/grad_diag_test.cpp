@@ -61,8 +61,8 @@ TEST_F(GradDiag, GradientIsTheSlopeAtAShortHorizonAndSmallScale) {
 }
 
 TEST_F(GradDiag, BadFlagsAreRefused) {
-  for (const std::string& bad : {"--kind blob", "--horizons 0", "--scales -1", "--horizons x",
-                                 "connectors.lr=-1"}) {
+  for (const char* bad : {"--kind blob", "--horizons 0", "--scales -1", "--horizons x",
+                           "connectors.lr=-1"}) {
     const auto r = testing::run_divcoll("grad-diag " + run_ + " " + bad);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
   }
