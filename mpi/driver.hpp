@@ -31,13 +31,12 @@ namespace divcoll::mpi {
 void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint);
 
-// this rank's running totals over every drive() call, in wall seconds: where the time between a round's
-// first broadcast and its last commit goes. Outside the farm every worker waits for the master, so on rank 0
+// this rank's running totals over every drive() call, in wall seconds, of its time outside farm() (the time
+// inside is FarmClock::farm_s). Outside the farm every worker waits for the master, so on rank 0
 // input + items + writes + commits is the serial time that bounds the speed-up with ranks
 struct DriverClock {
   double input_s = 0;    // broadcasting the round's input (plan.round_input, take_input)
   double items_s = 0;    // the master building the round's items (plan.items)
-  double farm_s = 0;     // inside farm(): items computed and results folded (plan.compute, plan.reduce)
   double writes_s = 0;   // the round's records (plan.end_round and the parallel writes)
   double commits_s = 0;  // commits: the state, the counter and the checkpoint
   long rounds = 0;

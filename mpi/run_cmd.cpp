@@ -420,13 +420,12 @@ int run_session(const RunArgs& args) {
         g.write_string("busy_s_per_rank_last_session", busy_text);
         // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
         const DriverClock& dc = driver_clock();
-        const double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
-                                  dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
-        double serial_b[4] = {serial[0], serial[1], serial[2], serial[3]};
-        MPI_Bcast(serial_b, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
+                            dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
+        MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
         char serial_text[160];
-        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial_b[0],
-                      serial_b[1], serial_b[2], serial_b[3]);
+        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
+                      serial[1], serial[2], serial[3]);
         g.write_string("master_serial_s_last_session", serial_text);
         if (rank == 0) {  // run_with_status has marked the stage complete
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",

@@ -34,7 +34,12 @@ double thread_cpu_s() {
 // woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work)
 class Backoff {
  public:
+  static constexpr int kMinUs = 20, kMaxUs = 2000;
+  // the master's longest look-away in a round's tail, where a worker waits for its next item
+  static constexpr int kTailUs = 200;
+
   void reset() { us_ = kMinUs; }
+  // the next sleep, at most max_us (the doubling goes on up to kMaxUs regardless)
   std::chrono::microseconds next(int max_us = kMaxUs) {
     const int us = std::min(us_, max_us);
     us_ = std::min(2 * us_, kMaxUs);
@@ -43,7 +48,6 @@ class Backoff {
   void sleep(int max_us = kMaxUs) { std::this_thread::sleep_for(next(max_us)); }
 
  private:
-  static constexpr int kMinUs = 20, kMaxUs = 2000;
   int us_ = kMinUs;
 };
 
@@ -226,6 +230,8 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   std::vector<char> ended(size, 0);
   std::vector<int> held(size, 0);  // blocks handed to each worker whose results have not come back
   int open_workers = size - 1;
+  // the round's tail: items are left, no more than 4 per computing rank (automatic blocks are then one item)
+  auto in_tail = [&](int64_t left) { return left > 0 && left <= 4 * computing; };
   auto give = [&](int w) {
     const auto t0 = Clock::now();
     int64_t first = 0, count = 0;
@@ -234,7 +240,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       const int64_t left = n - next;
       // the round's tail (blocks of one item): a worker gets its next item only once it has none left, so
       // that no item waits in one worker's queue while another rank, the master too, has nothing to do
-      if (left > 0 && left <= 4 * computing && held[w] > 0 && opt.block <= 0) return;
+      if (in_tail(left) && held[w] > 0 && opt.block <= 0) return;
       if (left > 0) {
         const int64_t guided = (left + 4 * computing - 1) / (4 * computing);
         count = std::min(left, opt.block > 0 ? int64_t{opt.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt.max_block)));
@@ -372,9 +378,8 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       backoff.reset();
     } else {
       std::unique_lock lk(sh.mu);
-      // in the round's tail a worker waits for its next item: look every 200 µs rather than every 2 ms
-      const bool tail = next < n && n - next <= 4 * computing;
-      sh.to_server.wait_for(lk, backoff.next(tail ? 200 : 2000),
+      // in the round's tail a worker waits for its next item: look more often
+      sh.to_server.wait_for(lk, backoff.next(in_tail(n - next) ? Backoff::kTailUs : Backoff::kMaxUs),
                             [&] { return local_new > 0 || sh.error || (!local_running && running); });
     }
   }
