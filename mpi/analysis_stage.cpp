@@ -123,7 +123,7 @@ class AdversityPlan final : public Plan {
       : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), agents_(agents), weights_(std::move(weights)),
         pairs_(std::move(pairs)), type_index_(type_index), novel_(std::move(novel)), deployed_(std::move(deployed)),
         E_(static_cast<int>(envs_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
-        T_(deploy_types), pop_(static_cast<int>(agents.size())), stiffness_(io::strength_stiffness(cfg, "weak")) {
+        T_(deploy_types), pop_(static_cast<int>(agents.size())), tether_(collective::strength_tether(cfg, "weak")) {
     rec_.steps = cfg.deploy.episode_steps;
     rec_.record = true;
     const int frames = cfg.deploy.episode_steps / A_.dtw_every + 1;
@@ -310,7 +310,7 @@ class AdversityPlan final : public Plan {
   std::string pair(const std::string& bytes) {
     const PairTask t = unpack<PairTask>(bytes);
     const sim::Scene s =
-        collective::pair_scene(agents_[t.a], agents_[t.b], weights_[t.type][t.replicate], stiffness_, envs_[env_]);
+        collective::pair_scene(agents_[t.a], agents_[t.b], weights_[t.type][t.replicate], tether_, envs_[env_]);
     const sim::RunResult r = sim_.run(s, rec_);
     PairDone d{r.travel, static_cast<uint8_t>(r.status), {kNaN, kNaN}};
     if (r.status == sim::Status::ok)
@@ -338,7 +338,7 @@ class AdversityPlan final : public Plan {
   const std::vector<std::string> novel_;
   const Deployed deployed_;
   const int E_, NP_, R_, T_, pop_;
-  const double stiffness_;
+  const collective::Tether tether_;
   sim::RunOptions rec_;
   analysis::DtwOptions dopt_;
   sim::Simulator sim_;

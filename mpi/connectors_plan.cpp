@@ -85,7 +85,7 @@ class ConnectorsPlan : public Plan {
     const ConnectorSlot& s = slots_[t.slot];
     const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
                                 weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
-    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.stiffness, s.env, ro, nullptr);
+    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, ro, nullptr);
     return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad};
   }
   // row `row` of each group's (rows × columns) dataset <group>/<name>, from per-slot values

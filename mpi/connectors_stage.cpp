@@ -2,6 +2,7 @@
 
 #include <numeric>
 
+#include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "mpi/driver.hpp"
@@ -54,7 +55,7 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < R; ++r)
-      slots.push_back({io::stiffness(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
+      slots.push_back({collective::tether(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);

@@ -34,11 +34,11 @@ std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node
 void store_anchors(MPI_Comm comm, const io::h5::File& file, const std::string& group,
                    const std::vector<collective::Agent>& agents);
 
-// one connector being trained: its springs' stiffness, its batches (uniform: agent i with its clone;
+// one connector being trained: its springs, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its
 // curves and weights go (row/column `column` of `group`'s datasets)
 struct ConnectorSlot {
-  double stiffness = 0;
+  collective::Tether tether;
   bool diverse = false;
   std::string env = "flat";
   uint64_t stream = 0;  // random stream of its initial weights (item 1000000) and batches (item = iteration)

@@ -41,9 +41,9 @@ void serialize(Ar& ar, DeployDone& d, unsigned) {
 class DeployPlan final : public Plan {
  public:
   DeployPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, std::vector<std::string> types,
-             std::vector<std::vector<std::vector<double>>> weights, std::vector<double> stiffness, std::vector<bool> diverse)
+             std::vector<std::vector<std::vector<double>>> weights, std::vector<collective::Tether> tethers, std::vector<bool> diverse)
       : cfg_(cfg), D_(cfg.deploy), agents_(agents), types_(std::move(types)), weights_(std::move(weights)),
-        stiffness_(std::move(stiffness)), diverse_(std::move(diverse)), E_(static_cast<int>(D_.environments.size())),
+        tethers_(std::move(tethers)), diverse_(std::move(diverse)), E_(static_cast<int>(D_.environments.size())),
         NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(cfg.connectors.replicates),
         T_(static_cast<int>(types_.size())), per_episode_(D_.episode_steps * 5),
         K_(D_.hidden_subsample == 0 ? per_episode_ : std::min(per_episode_, (D_.hidden_subsample + NP_ - 1) / NP_)),
@@ -99,7 +99,7 @@ class DeployPlan final : public Plan {
       if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / collective::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
-      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], stiffness_[e.type], env, opt, &full);
+      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, opt, &full);
       if (early_)
         d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D_.early_step) /
                      (0.5 * (collective::body_length(agents_[e.a]) + collective::body_length(agents_[e.b])));
@@ -185,7 +185,7 @@ class DeployPlan final : public Plan {
   const std::vector<collective::Agent>& agents_;
   const std::vector<std::string> types_;
   const std::vector<std::vector<std::vector<double>>> weights_;  // [type][replicate] → params
-  const std::vector<double> stiffness_;
+  const std::vector<collective::Tether> tethers_;
   const std::vector<bool> diverse_;
   const int E_, NP_, pop_, R_, T_, per_episode_, K_;
   const bool early_;  // deploy.early_step: travel at that step too (from the recorded run)
@@ -208,7 +208,7 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
   // the collective types: every trained kind on uniform and on diverse pairs
   std::vector<std::string> types;
   std::vector<std::vector<std::vector<double>>> weights;  // [type][replicate] → params
-  std::vector<double> stiffness;
+  std::vector<collective::Tether> tethers;
   std::vector<bool> diverse;
   for (const std::string& kind : cfg.connectors.kinds) {
     DIVCOLL_THROW_UNLESS(file.has("connectors/" + kind + "/params"),
@@ -217,11 +217,11 @@ void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
     for (const char* dep : {"uniform", "diverse"}) {
       types.push_back(kind + "@" + dep);
       weights.push_back(reps);
-      stiffness.push_back(io::stiffness(cfg, kind));
+      tethers.push_back(collective::tether(cfg, kind));
       diverse.push_back(std::string(dep) == "diverse");
     }
   }
-  DeployPlan plan(cfg, agents, types, weights, stiffness, diverse);
+  DeployPlan plan(cfg, agents, types, weights, tethers, diverse);
   drive(comm, cfg, file, plan, checkpoint);
 }
 

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "collective/pairs.hpp"
+#include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "mpi/agents_stage.hpp"
@@ -48,14 +49,14 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
 
 // one agent alone, a pair (or, with `chains`, a heap-order chain), forward only
 EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<collective::Agent>& agents,
-                          const std::vector<std::vector<double>>& weights, double stiffness,
+                          const std::vector<std::vector<double>>& weights, const collective::Tether& tether,
                           const std::vector<std::string>& envs, int steps, bool chains) {
   std::vector<const collective::Agent*> ptr;
   for (int32_t a : e.agents) ptr.push_back(&agents[a]);
   const collective::PairOutcome o =
       ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
-      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], stiffness, envs[e.env], steps, false)
-                      : collective::run_chain(sim, ptr, weights[e.weights], stiffness, envs[e.env], steps);
+      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], tether, envs[e.env], steps, false)
+                      : collective::run_chain(sim, ptr, weights[e.weights], tether, envs[e.env], steps);
   return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
 }
 
@@ -80,10 +81,10 @@ class EpisodesPlan final : public Plan {
   };
   using Summary = std::function<std::string(int env, const std::vector<EpisodeDone>& round)>;
   EpisodesPlan(std::string label, std::string group, const std::vector<collective::Agent>& agents,
-               std::vector<std::vector<double>> weights, double stiffness, std::vector<std::string> envs, int steps,
+               std::vector<std::vector<double>> weights, collective::Tether tether, std::vector<std::string> envs, int steps,
                std::vector<Part> parts, std::function<std::vector<GroupEpisode>(int env)> round_items, Summary summary)
       : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
-        stiffness_(stiffness), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
+        tether_(tether), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
         round_items_(std::move(round_items)), summary_(std::move(summary)) {}
   Info info() const override { return {label_, group_, "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return static_cast<int>(envs_.size()); }
@@ -95,7 +96,7 @@ class EpisodesPlan final : public Plan {
     return items;
   }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, stiffness_, envs_, steps_, false));
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, envs_, steps_, false));
   }
   void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int e) override {
@@ -124,7 +125,7 @@ class EpisodesPlan final : public Plan {
   const std::string label_, group_;
   const std::vector<collective::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
-  const double stiffness_;
+  const collective::Tether tether_;
   const std::vector<std::string> envs_;
   const int steps_;
   const std::vector<Part> parts_;
@@ -153,7 +154,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   std::vector<ConnectorSlot> slots;
   for (int e = 0; e < E; ++e)
     for (int r = 0; r < R; ++r)
-      slots.push_back({io::stiffness(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
+      slots.push_back({collective::tether(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
                        "specialists/" + envs[e], r});
   TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(comm, cfg, file, agents, slots, spec, checkpoint);
@@ -181,7 +182,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
                   bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
     return std::string(b);
   };
-  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, io::stiffness(cfg, "weak_diverse"), envs,
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), envs,
                     cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   drive(comm, cfg, file, plan, checkpoint);
@@ -242,7 +243,7 @@ class ScalingPlan final : public Plan {
     return items;
   }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, io::stiffness(cfg_, "weak_uniform"),
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"),
                               cfg_.deploy.environments, S_.episode_steps, true));
   }
   void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
@@ -353,7 +354,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       store_anchors(comm, file, spec.group, agents);
       std::vector<ConnectorSlot> slots;
       for (int r = 0; r < R; ++r)
-        slots.push_back({io::stiffness(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
+        slots.push_back({collective::tether(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
                          base + "/connectors/weak_diverse", r});
       TrainSpec ts{base + "/connectors", std::string("graded ") + names[v] + " connectors", cfg.connectors.iterations,
                    cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
@@ -385,7 +386,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       };
       const uint64_t uG = GP, uR = R, uN = NP;
       EpisodesPlan plan(std::string("graded ") + names[v] + " deploy", base, agents, weights,
-                        io::stiffness(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
+                        collective::tether(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
                         {{base + "/deploy/agents", {uG}}, {base + "/deploy/pairs", {uR, uN}}}, round_items, summary);
       drive(comm, cfg, file, plan, checkpoint);
     });

@@ -196,7 +196,7 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
         if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
       std::vector<std::string> envs = {"flat"};
       if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
-      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, k, env), cfg.connectors.episode_steps, "connectors.episode_steps");
+      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env), cfg.connectors.episode_steps, "connectors.episode_steps");
     }
     const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
     if (need > limit)

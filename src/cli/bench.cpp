@@ -13,6 +13,7 @@
 #include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
+#include "collective/deploy_variants.hpp"
 #include "io/pipeline.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
@@ -30,7 +31,7 @@ double thread_cpu_seconds() {
 struct Fixture {
   std::vector<collective::Agent> agents;
   std::vector<double> conn;
-  double stiffness = 0;  // of the weak connector, from the config
+  collective::Tether tether;  // of the weak connector, from the config
 };
 
 Fixture make_fixture(int n_agents, uint64_t seed) {
@@ -49,10 +50,10 @@ sim::Scene make_scene(const Fixture& f, const std::string& kind, int b, const si
   const int n = static_cast<int>(f.agents.size());
   if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", c);
   if (kind == "pair")
-    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.stiffness, "flat", c);
+    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.tether, "flat", c);
   std::vector<const collective::Agent*> chain;
   for (int q = 0; q < 20; ++q) chain.push_back(&f.agents[(b + q) % n]);
-  return collective::chain_scene(chain, f.conn, f.stiffness, "flat", c);
+  return collective::chain_scene(chain, f.conn, f.tether, "flat", c);
 }
 
 // runs batches until `seconds` of the thread's CPU time have passed; returns scene-steps per CPU-second
@@ -82,7 +83,7 @@ int bench(const BenchArgs& a) {
   std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
               divcoll::git_commit());
   Fixture f = make_fixture(24, 7);
-  f.stiffness = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config), "weak");
+  f.tether = collective::strength_tether(a.config.empty() ? io::default_config() : io::load_config(a.config), "weak");
 
   // ---- throughput --------------------------------------------------------------------------------
   std::printf("## Throughput: scene-steps per CPU-second of one core (the thread's CPU time, not wall time)\n\n");

@@ -11,6 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "evo/connector_opt.hpp"
+#include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "io/config.hpp"
@@ -53,7 +54,7 @@ int connector_opt(const ConnectorOptArgs& a) {
   for (size_t k = 0; k < C.kinds.size(); ++k) {
     const std::string& kind = C.kinds[k];
     const bool diverse = io::connector_kind(kind).diverse;
-    const double stiff = io::stiffness(cfg, kind);
+    const collective::Tether stiff = collective::tether(cfg, kind);
     std::vector<std::pair<int, int>> eval;
     if (diverse) {
       Rng rng = make_rng(cfg.run.seed, 3000, 0);  // the deployment's diverse pairs

@@ -82,7 +82,7 @@ int export_scene(const ExportArgs& a) {
       const auto up = collective::deploy_uniform_pairs(cfg)[a.pair];
       const int p = diverse ? dp[2 * a.pair] : up.first, q = diverse ? dp[2 * a.pair + 1] : up.second;
       with_anchors();
-      const double k = io::stiffness(cfg, kind);
+      const collective::Tether k = collective::tether(cfg, kind);
       s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,
                                  a.env);
       idx = {e, t, a.replicate, a.pair};
@@ -99,7 +99,7 @@ int export_scene(const ExportArgs& a) {
     const int p = dp[2 * a.pair], q = dp[2 * a.pair + 1];
     with_anchors();
     s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "specialists/" + a.env, a.replicate),
-                               io::stiffness(cfg, "weak_diverse"), a.env);
+                               collective::tether(cfg, "weak_diverse"), a.env);
     idx = {e, a.replicate, a.pair};
     steps = cfg.deploy.episode_steps;
     stage = "specialists";
@@ -127,7 +127,7 @@ int export_scene(const ExportArgs& a) {
     std::vector<const collective::Agent*> ptr;
     for (int32_t m : members) ptr.push_back(&agents[m]);
     s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
-                                io::stiffness(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);
+                                collective::tether(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);
     idx = {e, si, v, a.replicate, a.draw};
     steps = cfg.scaling.episode_steps;
     stage = "scaling";

@@ -11,6 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "evo/connector_opt.hpp"
+#include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "io/config.hpp"
@@ -84,7 +85,7 @@ int grad_diag(const GradDiagArgs& a) {
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
   const bool diverse = io::connector_kind(a.kind).diverse;
-  const double k = io::stiffness(cfg, a.kind);
+  const collective::Tether k = collective::tether(cfg, a.kind);
   DIVCOLL_THROW_UNLESS(diverse || a.pairs <= pop, "--pairs " << a.pairs << " is more than the population (" << pop << ")");
   // the stage's replicate 0 of this kind: its initial weights and its first batch
   const uint64_t stream = 2000 + static_cast<uint64_t>(kind) * C.replicates;
@@ -107,8 +108,8 @@ int grad_diag(const GradDiagArgs& a) {
                 C.optimizer.c_str(), C.lr, tr.curve_bl.front(), tr.curve_bl.back());
   }
   const double theta_norm = norm(theta);
-  std::printf("# gradient diagnosis: %s, %d pairs, stiffness %g, |theta| = %.4g, seed %llu\n\n", a.kind.c_str(),
-              a.pairs, k, theta_norm, static_cast<unsigned long long>(cfg.run.seed));
+  std::printf("# gradient diagnosis: %s, %d pairs, stiffness %g, amplitude %g, |theta| = %.4g, seed %llu\n\n", a.kind.c_str(),
+              a.pairs, k.stiffness, k.amplitude, theta_norm, static_cast<unsigned long long>(cfg.run.seed));
   std::printf("J = mean pair travel over the batch (u; BL in brackets); g = its backpropagated gradient. Central\n"
               "finite differences (J(θ+hd) − J(θ−hd))/2h at h = scale·|θ| against g·d, as the ratio FD / BPTT\n"
               "(1 = the gradient is the slope at that scale). Along ĝ the last column block is the change\n"

@@ -7,6 +7,7 @@
 
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
+#include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "io/memory.hpp"
 #include "io/config.hpp"
@@ -99,7 +100,7 @@ int scene(const SceneArgs& a) {
   io::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const double k = io::strength_stiffness(a.config.empty() ? io::default_config() : io::load_config(a.config),
+  const collective::Tether k = collective::strength_tether(a.config.empty() ? io::default_config() : io::load_config(a.config),
                                          a.connector);
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
@@ -224,7 +225,7 @@ int demo(const DemoArgs& a) {
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, io::strength_stiffness(io::default_config(), "weak"), env);
+      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config(), "weak"), env);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
       sim::RunOptions opt;

@@ -54,7 +54,7 @@ void append_agent(sim::Scene& s, const Agent& a, double x_left) {
 }
 
 // one connector between posterior agent p and anterior agent q (scene agent indices), SPEC §6.2
-void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Anchors& A, double stiffness) {
+void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Anchors& A, const Tether& t) {
   DIVCOLL_THROW_UNLESS(P.front_foot >= 0 && P.front_upper >= 0 && P.back_upper >= 0 && A.back_foot >= 0 &&
                            A.back_upper >= 0,
                        "connector agents have no anchors (run compute_anchors first)");
@@ -71,8 +71,8 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
     s.spring_i.push_back(i);
     s.spring_j.push_back(j);
     s.rest_length.push_back(std::sqrt(dx * dx + dy * dy));
-    s.stiffness.push_back(stiffness);
-    s.amplitude.push_back(kConnectorAmplitude);
+    s.stiffness.push_back(t.stiffness);
+    s.amplitude.push_back(t.amplitude);
     s.damping.push_back(0.0);
   }
 }
@@ -198,20 +198,20 @@ Anchors compute_anchors(const Agent& a, const sim::Constants& c, int steps) {
   return an;
 }
 
-sim::Scene pair_scene(const Agent& P, const Agent& A, const std::vector<double>& conn, double stiffness,
+sim::Scene pair_scene(const Agent& P, const Agent& A, const std::vector<double>& conn, const Tether& tether,
                       const std::string& env, const sim::Constants& c) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, P, 0.0);
   append_agent(s, A, (max_x(P) - min_x(P)) + 0.05);
-  append_connector(s, 0, 1, P.anchors, A.anchors, stiffness);
+  append_connector(s, 0, 1, P.anchors, A.anchors, tether);
   s.connector_params = conn;
   place_env(s, env);
   return s;
 }
 
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& conn,
-                       double stiffness, const std::string& env, const sim::Constants& c) {
+                       const Tether& tether, const std::string& env, const sim::Constants& c) {
   const int n = static_cast<int>(agents.size());
   DIVCOLL_THROW_UNLESS(n >= 2, "a chain needs at least 2 agents (got " << n << ")");
   // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − 0.05
@@ -226,7 +226,7 @@ sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vecto
   s.constants = c;
   for (int k = 0; k < n; ++k) append_agent(s, *agents[k], left[k] + shift);
   for (int k = 1; k < n; ++k) append_connector(s, k, (k - 1) / 2, agents[k]->anchors, agents[(k - 1) / 2]->anchors,
-                                               stiffness);
+                                               tether);
   s.connector_params = conn;
   place_env(s, env);
   return s;

@@ -28,10 +28,17 @@ struct Agent {
   Anchors anchors;                     // filled by compute_anchors
 };
 
-// stiffness of the two connector kinds (SPEC §6.2), force/u
-inline constexpr double kWeakConnector = 5e3;
-inline constexpr double kStrongConnector = 3e4;
+// relative actuation amplitude of a connector's springs (SPEC §6.2; config key connectors.amplitude)
 inline constexpr double kConnectorAmplitude = 0.6;
+
+// the springs of one connector (SPEC §6.2): all 5 get this stiffness and amplitude
+struct Tether {
+  double stiffness = 0;                    // force/u (per unit mass)
+  double amplitude = kConnectorAmplitude;  // fraction of its rest length a spring's target length moves (0 = passive)
+};
+// the paper reading's two connector kinds (SPEC §6.2; config keys connectors.weak_stiffness, strong_stiffness)
+inline constexpr Tether kWeakConnector{5e3};
+inline constexpr Tether kStrongConnector{3e4};
 
 // body length of an agent: max x − min x of its rest positions, u (SPEC §1)
 double body_length(const Agent& a);
@@ -51,13 +58,13 @@ sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Consta
 Anchors compute_anchors(const Agent& a, const sim::Constants& c = {}, int steps = 1000);
 
 // SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + 0.05)
-// joined by one connector of the given stiffness; both agents need anchors
+// joined by one connector with the given springs; both agents need anchors
 sim::Scene pair_scene(const Agent& posterior, const Agent& anterior, const std::vector<double>& connector_params,
-                      double stiffness, const std::string& env, const sim::Constants& c = {});
+                      const Tether& tether, const std::string& env, const sim::Constants& c = {});
 
 // SPEC §7.4: a chain of agents in binary-tree heap order: agent 0 is front-most, agents 2k+1 and 2k+2 hang
 // behind agent k (same x, overlapping); connector k−1 joins child k (posterior) to its parent (anterior)
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& connector_params,
-                       double stiffness, const std::string& env, const sim::Constants& c = {});
+                       const Tether& tether, const std::string& env, const sim::Constants& c = {});
 
 }  // namespace divcoll::collective

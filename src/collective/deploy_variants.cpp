@@ -4,8 +4,17 @@
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
+#include "io/pipeline.hpp"
 
 namespace divcoll::collective {
+
+Tether tether(const io::RunConfig& cfg, std::string_view kind) {
+  return {io::stiffness(cfg, kind), cfg.connectors.amplitude};
+}
+
+Tether strength_tether(const io::RunConfig& cfg, std::string_view strength) {
+  return {io::strength_stiffness(cfg, strength), cfg.connectors.amplitude};
+}
 
 std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg) {
   std::vector<std::pair<int, int>> p = uniform_pairs(cfg.deploy.pairs);

@@ -1,7 +1,8 @@
-// the deployment's readings of the paper that a study varies (deploy.uniform_agents,
-// deploy.feature_placement, deploy.early_step), in one place for deploy, the analysis stage and export
+// the readings of the paper that a study varies in how collectives are built and deployed (connectors.amplitude,
+// deploy.uniform_agents, deploy.feature_placement, deploy.early_step), in one place for the stages and commands
 #pragma once
 
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -10,6 +11,12 @@
 #include "sim/engine.hpp"
 
 namespace divcoll::collective {
+
+// the springs of a connector of `kind` (weak_uniform, weak_diverse, strong_uniform, strong_diverse): the kind's
+// stiffness (connectors.weak_stiffness or strong_stiffness) and connectors.amplitude
+Tether tether(const io::RunConfig& cfg, std::string_view kind);
+// the same for a strength alone (weak or strong), as `divcoll scene --connector` names it
+Tether strength_tether(const io::RunConfig& cfg, std::string_view strength);
 
 // the (posterior, anterior) agents of uniform deployment pair q < deploy.pairs: (i, i) with i = q, or
 // i = connectors.batch_pairs + q when deploy.uniform_agents = held_out

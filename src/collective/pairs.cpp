@@ -26,17 +26,17 @@ std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n) {
 }
 
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
-                     double stiffness, const std::string& env, int steps, bool grad) {
+                     const Tether& tether, const std::string& env, int steps, bool grad) {
   sim::RunOptions opt;
   opt.steps = steps;
   opt.grad = grad;
   opt.agent_param_grad = false;  // only the connector gradient is returned: the agents stay frozen
-  return run_pair(sim, P, A, params, stiffness, env, opt, nullptr);
+  return run_pair(sim, P, A, params, tether, env, opt, nullptr);
 }
 
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
-                     double stiffness, const std::string& env, const sim::RunOptions& opt, sim::RunResult* full) {
-  const sim::Scene s = pair_scene(P, A, params, stiffness, env);
+                     const Tether& tether, const std::string& env, const sim::RunOptions& opt, sim::RunResult* full) {
+  const sim::Scene s = pair_scene(P, A, params, tether, env);
   sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;
@@ -48,8 +48,8 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
 }
 
 PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
-                      double stiffness, const std::string& env, int steps) {
-  const sim::Scene s = chain_scene(agents, params, stiffness, env);
+                      const Tether& tether, const std::string& env, int steps) {
+  const sim::Scene s = chain_scene(agents, params, tether, env);
   sim::RunOptions opt;
   opt.steps = steps;
   const sim::RunResult r = sim.run(s, opt);

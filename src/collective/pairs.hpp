@@ -26,18 +26,18 @@ struct PairOutcome {
 
 // one pair episode: `posterior` left, `anterior` right, joined by the connector `params`
 PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& anterior,
-                     const std::vector<double>& params, double stiffness, const std::string& env, int steps,
+                     const std::vector<double>& params, const Tether& tether, const std::string& env, int steps,
                      bool grad);
 
 // the same with every option of the run (e.g. record_hidden); `full` (if given) receives the whole result
 PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& anterior,
-                     const std::vector<double>& params, double stiffness, const std::string& env,
+                     const std::vector<double>& params, const Tether& tether, const std::string& env,
                      const sim::RunOptions& opt, sim::RunResult* full);
 
 // a chain of agents in heap order (agent 0 front-most), one connector for all: travel of the whole chain's
 // centre of mass in u and in mean body lengths of its agents (no gradient)
 PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
-                      double stiffness, const std::string& env, int steps);
+                      const Tether& tether, const std::string& env, int steps);
 
 // one agent alone: travel in u and BL
 PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps);

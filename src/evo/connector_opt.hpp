@@ -146,7 +146,7 @@ struct PlainTrainResult {
   long pair_episodes_grad = 0, pair_episodes_fwd = 0;  // the compute spent
 };
 struct PlainTrainSpec {
-  double stiffness = 5000;
+  Tether tether = kWeakConnector;
   bool diverse = false;
   int iterations = 0, batch_pairs = 0, episode_steps = 1000, validation_pairs = 0;  // 0 = no validation
   uint64_t seed = 1, stream = 0;
@@ -157,6 +157,6 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
 // one probe over a list of pairs in a plain loop (grad with the window of `s`)
 ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      double stiffness, int steps, int bptt_window);
+                      const Tether& tether, int steps, int bptt_window);
 
 }  // namespace divcoll::collective

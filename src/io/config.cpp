@@ -175,6 +175,10 @@ const std::vector<Key>& schema() {
         num("connectors", "strong_stiffness", T::Double, "30000.0", "(0, 1e7]", "1/s^2",
             "spring stiffness of strong connectors (per unit mass)",
             DIVCOLL_FIELD(connectors.strong_stiffness)),
+        num("connectors", "amplitude", T::Double, "0.6", "[0, 0.9]", "",
+            "actuation amplitude of connector springs, a fraction of their rest length (SPEC §6.2 reads the paper "
+            "as 0.6; 0 = passive tethers); every stage that builds a connector uses it",
+            DIVCOLL_FIELD(connectors.amplitude)),
         pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
              "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
              "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "

@@ -54,6 +54,7 @@ struct RunConfig {
     int episode_steps{};             // steps of one training rollout
     double weak_stiffness{};         // spring stiffness of weak connectors
     double strong_stiffness{};       // spring stiffness of strong connectors
+    double amplitude{};              // actuation amplitude of connector springs (fraction of rest length)
     std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
     double clip_norm{};              // global gradient norm clip

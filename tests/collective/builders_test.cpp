@@ -89,7 +89,7 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
     EXPECT_GE(s.spring_j[sp], 11) << "spring j is on the anterior";
     EXPECT_TRUE(std::isfinite(s.rest_length[sp]));
     EXPECT_GT(s.rest_length[sp], 0.05);
-    EXPECT_EQ(s.stiffness[sp], collective::kWeakConnector);
+    EXPECT_EQ(s.stiffness[sp], collective::kWeakConnector.stiffness);
     EXPECT_EQ(s.amplitude[sp], 0.6);
   }
   // spring order of SPEC §6.2
@@ -104,6 +104,13 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   EXPECT_EQ(ymin, 0.0);
   const sim::Scene g = collective::pair_scene(p, a, s.connector_params, collective::kWeakConnector, "gap");
   EXPECT_NEAR(g.env.terrain[1].x_start, max_x_of(g, 1) + 0.05, 1e-15);
+  // a tether of another stiffness and amplitude reaches the 5 connector springs and no agent spring
+  const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25}, "flat");
+  for (int r = 0; r < 5; ++r) {
+    EXPECT_EQ(t.stiffness[t.connector_spring_index[r]], 1234.5);
+    EXPECT_EQ(t.amplitude[t.connector_spring_index[r]], 0.25);
+  }
+  for (int sp : t.agent_spring_index) EXPECT_EQ(t.amplitude[sp], s.amplitude[sp]);
 }
 
 TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {

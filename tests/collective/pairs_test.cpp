@@ -20,7 +20,7 @@ struct Loss {
   std::vector<double> grad;
 };
 Loss batch_loss(const std::vector<collective::Agent>& agents, const std::vector<std::pair<int, int>>& batch,
-                const std::vector<double>& w, double k, const std::string& env, int steps, bool grad) {
+                const std::vector<double>& w, const collective::Tether& k, const std::string& env, int steps, bool grad) {
   sim::Simulator sim;
   Loss l;
   l.grad.assign(w.size(), 0.0);
@@ -34,7 +34,7 @@ Loss batch_loss(const std::vector<collective::Agent>& agents, const std::vector<
   return l;
 }
 
-class PairLossGradient : public ::testing::TestWithParam<std::pair<const char*, double>> {};
+class PairLossGradient : public ::testing::TestWithParam<std::pair<const char*, collective::Tether>> {};
 
 // the batch gradient the master assembles equals central differences of the batch loss along random
 // directions, for a weak and a strong connector on flat and on a novel environment
@@ -49,7 +49,7 @@ TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
   // with a strong connector one pair of this batch becomes chaotic after ~100 steps (measured: at 100 steps
   // the gradient along a direction is −65.55, central differences give 147, −1996, −65.45, −65.549 for
   // h = 1e-5 .. 1e-8; at 150 steps no h agrees), so the strong case is checked over 40 steps
-  const int steps = k > 1e4 ? 40 : 150;
+  const int steps = k.stiffness > 1e4 ? 40 : 150;
   const Loss l = batch_loss(agents, batch, w, k, env, steps, true);
   double gnorm = 0;
   for (double g : l.grad) gnorm += g * g;
@@ -73,7 +73,36 @@ TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
 INSTANTIATE_TEST_SUITE_P(WeakAndStrong, PairLossGradient,
                          ::testing::Values(std::pair{"flat", collective::kWeakConnector},
                                            std::pair{"flat", collective::kStrongConnector},
-                                           std::pair{"ice", collective::kWeakConnector}));
+                                           std::pair{"ice", collective::kWeakConnector},
+                                           // connectors.amplitude other than the paper reading's 0.6
+                                           std::pair{"flat", collective::Tether{5e3, 0.3}}),
+                         [](const auto& info) {  // e.g. flat_k5000_a60 (amplitude in %)
+                           return std::string(info.param.first) + "_k" +
+                                  std::to_string(static_cast<int>(info.param.second.stiffness)) + "_a" +
+                                  std::to_string(static_cast<int>(std::lround(100 * info.param.second.amplitude)));
+                         });
+
+// connectors.amplitude = 0 makes passive tethers: the connector network's output moves no spring, so travel does
+// not depend on its weights and their gradient is exactly zero; any other amplitude lets the weights act
+TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot) {
+  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  Rng rng = make_rng(5, 9, 0);
+  const std::vector<double> w = morph::init_connector_params(rng, 1.0), w2 = morph::init_connector_params(rng, 1.0);
+  ASSERT_NE(w, w2);
+  sim::Simulator sim;
+  const collective::Tether passive{collective::kWeakConnector.stiffness, 0.0};
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", 200, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", 200, true);
+  ASSERT_EQ(a.status, sim::Status::ok);
+  EXPECT_EQ(a.travel_u, b.travel_u);
+  for (double g : a.grad) EXPECT_EQ(g, 0.0);
+  const auto c = collective::run_pair(sim, agents[0], agents[1], w, collective::kWeakConnector, "flat", 200, true);
+  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, collective::kWeakConnector, "flat", 200, true);
+  EXPECT_NE(c.travel_u, d.travel_u);
+  double gn = 0;
+  for (double g : c.grad) gn += g * g;
+  EXPECT_GT(gn, 0.0);
+}
 
 TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithItself) {
   const auto u = collective::uniform_pairs(5);

@@ -79,6 +79,7 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
   EXPECT_EQ(d.agents.uniqueness_k, 5);
   EXPECT_EQ(d.connectors.weak_stiffness, 5000.0);
   EXPECT_EQ(d.connectors.strong_stiffness, 30000.0);
+  EXPECT_EQ(d.connectors.amplitude, 0.6);  // SPEC §6.2
   EXPECT_EQ(d.connectors.lr, 3e-3);
   EXPECT_EQ(d.connectors.kinds.size(), 4u);
   EXPECT_EQ(d.deploy.environments, environment_names());
@@ -148,6 +149,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.episode_steps",
                                              "connectors.weak_stiffness",
                                              "connectors.strong_stiffness",
+                                             "connectors.amplitude",
                                              "connectors.optimizer",
                                              "connectors.lr",
                                              "connectors.clip_norm",
@@ -261,6 +263,7 @@ TEST(ConfigErrors, OutOfRangeNamesKeyAndRange) {
   EXPECT_THAT(refusal("[agents]\nbody_flip_p = 1.5\n"),
               HasSubstr("agents.body_flip_p = 1.5 is out of range [0, 1]"));
   EXPECT_THAT(refusal("[connectors]\nlr = nan\n"), HasSubstr("connectors.lr = nan is out of range"));
+  EXPECT_THAT(refusal("[connectors]\namplitude = 1.0\n"), HasSubstr("connectors.amplitude = 1.0 is out of range [0, 0.9]"));
   // larger than an int holds
   EXPECT_THAT(refusal("[agents]\nepochs = 9999999999999\n"),
               HasSubstr("agents.epochs = 9999999999999 is out of"));

@@ -1,0 +1,47 @@
+// the readings a study varies in how collectives are built and deployed (src/collective/deploy_variants.hpp):
+// a connector's springs from the config, uniform deployment pairs on training or held-out agents, feature
+// offsets of agents alone
+#include <gtest/gtest.h>
+
+#include "collective/deploy_variants.hpp"
+#include "common/check.hpp"
+#include "io/config.hpp"
+#include "testing.hpp"
+
+namespace divcoll {
+namespace {
+
+TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
+  const io::RunConfig d = io::default_config();
+  EXPECT_EQ(collective::tether(d, "weak_uniform").stiffness, collective::kWeakConnector.stiffness);
+  EXPECT_EQ(collective::tether(d, "strong_diverse").stiffness, collective::kStrongConnector.stiffness);
+  EXPECT_EQ(collective::tether(d, "weak_diverse").amplitude, collective::kConnectorAmplitude);
+  const io::RunConfig c = io::apply_overrides(
+      d, {"connectors.amplitude=0.3", "connectors.weak_stiffness=700", "connectors.strong_stiffness=9000"});
+  for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
+    EXPECT_EQ(collective::tether(c, kind).amplitude, 0.3) << kind;
+  EXPECT_EQ(collective::tether(c, "weak_diverse").stiffness, 700.0);
+  EXPECT_EQ(collective::tether(c, "strong_uniform").stiffness, 9000.0);
+  EXPECT_EQ(collective::strength_tether(c, "weak").stiffness, 700.0);
+  EXPECT_EQ(collective::strength_tether(c, "strong").amplitude, 0.3);
+  EXPECT_THROW(collective::tether(c, "medium_uniform"), InputError);
+  EXPECT_THROW(collective::strength_tether(c, "medium"), InputError);
+}
+
+TEST(DeployUniformPairs, HeldOutAgentsFollowTheTrainingBatchAndNeverMeetIt) {
+  const io::RunConfig c = io::apply_overrides(io::default_config(),
+                                              {"agents.population=120", "connectors.batch_pairs=5", "deploy.pairs=20"});
+  const auto training = collective::deploy_uniform_pairs(c);
+  ASSERT_EQ(training.size(), 20u);
+  for (size_t q = 0; q < training.size(); ++q) EXPECT_EQ(training[q], std::make_pair(int(q), int(q)));
+  const auto held = collective::deploy_uniform_pairs(io::apply_overrides(c, {"deploy.uniform_agents=held_out"}));
+  ASSERT_EQ(held.size(), 20u);
+  for (size_t q = 0; q < held.size(); ++q) {
+    EXPECT_EQ(held[q].first, held[q].second);
+    EXPECT_GE(held[q].first, 5) << "an agent of the uniform training batch";
+    EXPECT_LT(held[q].first, 25);
+  }
+}
+
+}  // namespace
+}  // namespace divcoll
