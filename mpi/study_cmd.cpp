@@ -244,6 +244,12 @@ void write_manifest(const std::string& dir, const toml::table& t) {
   fs::rename(tmp, p);
 }
 
+// robustness.py's summary of a run file: DIR/<variant>/seed<k>.h5 -> DIR/<variant>/seed<k>.summary.json
+std::filesystem::path summary_path(const std::filesystem::path& run) {
+  std::filesystem::path p = run;
+  return p.replace_extension(".summary.json");
+}
+
 std::string clock_text(double s) {
   char b[32];
   if (s < 0) return "unknown";
@@ -322,8 +328,12 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
             if (!t) continue;
             status[i] = (*t)["status"].value_or(std::string("planned"));
             wall[i] = (*t)["wall_s"].value_or(0.0);
-            // a run marked complete whose file is gone is run again
-            if (status[i] == "complete" && !fs::exists(fs::path(dir) / runs[i].path)) status[i] = "planned";
+            // a run marked complete whose file is gone is run again, unless its summary is there (robustness.py
+            // writes DIR/<variant>/seed<k>.summary.json beside each run file; a folder kept as its manifest and
+            // summaries gathers seeds run elsewhere)
+            if (status[i] == "complete" && !fs::exists(fs::path(dir) / runs[i].path) &&
+                !fs::exists(summary_path(fs::path(dir) / runs[i].path)))
+              status[i] = "planned";
           }
       } else {
         for (const PlannedRun& r : runs)
@@ -404,6 +414,18 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
       int ex = exists;
       MPI_Bcast(&ex, 1, MPI_INT, 0, MPI_COMM_WORLD);
       if (r.base_run >= 0 && !ex) {
+        int base_ok = 1;
+        if (rank == 0) base_ok = fs::exists(fs::path(dir) / runs[r.base_run].path);
+        MPI_Bcast(&base_ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        if (!base_ok) {
+          if (rank == 0)
+            std::fprintf(stderr,
+                         "divcoll: error: %s reuses the stages before %s of %s, whose run file is not in %s (only its "
+                         "summary is): put the run file back, or remove the summary to compute that run again\n",
+                         r.path.c_str(), r.from.c_str(), runs[r.base_run].path.c_str(), dir.c_str());
+          code = 2;
+          break;
+        }
         ra.from = r.from;
         ra.base = (fs::path(dir) / runs[r.base_run].path).string();
       } else {

@@ -5,7 +5,13 @@ the paper's Fig. 2A per variant with error bars over seeds.
 
     /usr/bin/python3 postprocess/robustness.py DIR [--out OUT]     (what `divcoll report DIR` runs)
 
-Writes OUT/robustness.md and OUT/figures/fig2a_<variant>.png (OUT defaults to DIR/robustness).
+Writes OUT/robustness.md and OUT/figures/fig2a_<variant>.png (OUT defaults to DIR/robustness), and beside each
+run file DIR/<variant>/seed<k>.h5 its summary DIR/<variant>/seed<k>.summary.json: every number this page reads
+from that run (each claim's verdict and effect under each reading, Fig. 2A's per-environment means) with the run's
+config and commits, a few KB. A run whose .h5 is gone is read from its summary, so a study folder kept as its
+manifest, base config and summaries (e.g. in postprocess/gallery/studies/) gives the same page, and seeds run
+in different sessions or on a cluster can be gathered in one folder (`divcoll study --resume` counts a run
+with a summary as complete).
 
 Every claim is the one of claims.py, evaluated by claims.py on each run file (the "held in k/n seeds" count
 uses its verdicts unchanged). The effect of a claim is the margin of the comparison behind claims.py's verdict,
@@ -228,6 +234,121 @@ def num(x):
     return "—" if x is None or not np.isfinite(x) else f"{x:+.3g}"
 
 
+# ---- run summaries: what this page reads from one run file, kept beside it ----------------------------------------
+
+SUMMARY_FORMAT = "divcoll-run-summary"
+SUMMARY_VERSION = 1
+AS_RUN = "as_run"  # the key of the claims as the run's own config reads them
+
+
+def summary_path(run_path):
+    return os.path.splitext(run_path)[0] + ".summary.json"
+
+
+def _finite_or_none(x):
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def _cell(fn, run):
+    """(claims.py's verdict, the effect or None) of claim function `fn` on a claims.Run or a reading of one"""
+    try:
+        _, vd = fn(run)
+        e = EFFECTS[fn][0](run)
+    except (KeyError, ValueError, IndexError, ZeroDivisionError):
+        vd, e = "not measured", None
+    return vd, e
+
+
+def summarize(run):
+    """the summary dict of a claims.Run read from its run file"""
+    import h5py
+    readings = {AS_RUN: run}
+    for protocol, _ in READINGS:
+        rr = reread(run, protocol)
+        if rr is not None:
+            readings[protocol] = rr
+    claims = {}
+    for key, r in readings.items():
+        claims[key] = {fn.__name__: dict(zip(("verdict", "effect"), (lambda c: (c[0], _finite_or_none(c[1])))(_cell(fn, r))))
+                       for _, fn in C.CLAIMS if key == AS_RUN or fn in ALONE_CLAIMS}
+    fig = None
+    if run.has["deploy"]:
+        fig = {"environments": run.envs, "types": run.types,
+               "alone": {k: [float(x) for x in r.alone] for k, r in readings.items()},
+               "collectives": {t: [float(x) for x in run.coll[t]] for t in run.types}}
+    with h5py.File(run.path, "r") as f:
+        attrs = {a: C._s(f.attrs[a]) for a in ("git_commit", "base_git_commit", "start_time", "end_time")
+                 if a in f.attrs}
+        # the run's config as its values (the run file's TOML text, comments and all, is about 12 KB)
+        attrs["config"] = tomllib.loads(C._s(f.attrs["config"])) if "config" in f.attrs else {}
+    return {"format": SUMMARY_FORMAT, "version": SUMMARY_VERSION, "run_file": os.path.basename(run.path),
+            **attrs, "stages_complete": run.has, "claims": claims, "fig2a": fig}
+
+
+def write_summary(run):
+    """writes run's summary beside its run file (atomically); returns its path"""
+    import json
+    path = summary_path(run.path)
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        json.dump(summarize(run), fh, indent=None, sort_keys=True)
+        fh.write("\n")
+    os.replace(tmp, path)
+    return path
+
+
+class SummaryRun:
+    """a run read from its summary: what evaluate() and fig2a() use of a claims.Run"""
+
+    def __init__(self, path, data=None, reading=AS_RUN):
+        import json
+        self.path = path
+        if data is None:
+            with open(path) as fh:
+                data = json.load(fh)
+            if data.get("format") != SUMMARY_FORMAT or data.get("version") != SUMMARY_VERSION:
+                raise ValueError(f"{path} is not a divcoll run summary of version {SUMMARY_VERSION}")
+        self.data, self.reading = data, reading
+        self.has = data["stages_complete"]
+        self.config = data.get("config", {})
+        fig = data.get("fig2a")
+        if fig:
+            self.envs, self.types = fig["environments"], fig["types"]
+            self.flat = self.envs.index("flat")
+            self.novel = [i for i, e in enumerate(self.envs) if e != "flat"]
+            self.alone = np.array(fig["alone"][reading], dtype=float)
+            self.coll = {t: np.array(v, dtype=float) for t, v in fig["collectives"].items()}
+
+    def novel_mean(self, arr):
+        return float(np.mean(arr[self.novel]))
+
+    def cell(self, fn):
+        c = self.data["claims"][self.reading].get(fn.__name__)
+        if c is None:
+            return "not measured", None
+        return c["verdict"], c["effect"]
+
+    def reread(self, protocol):
+        return SummaryRun(self.path, self.data, protocol) if protocol in self.data["claims"] else None
+
+    def commits(self):
+        return {self.data[a] for a in ("git_commit", "base_git_commit") if a in self.data}
+
+
+def run_config(run):
+    return run.config if isinstance(run, SummaryRun) else C.config(run.path)
+
+
+def load_run(folder, rel):
+    """the run at `rel` in the study folder: its run file if there, else its summary; None if neither"""
+    path = os.path.join(folder, rel)
+    if os.path.exists(path):
+        return C.Run(path)
+    if os.path.exists(summary_path(path)):
+        return SummaryRun(summary_path(path))
+    return None
+
+
 # ---- the study folder -----------------------------------------------------------------------------------------
 
 def load_manifest(folder):
@@ -254,6 +375,8 @@ def reread(run, protocol):
     """a copy of the claims.Run with agents alone read under `protocol` (None when the run cannot be)"""
     import h5py
     import summary
+    if isinstance(run, SummaryRun):
+        return run.reread(protocol)
     if not run.has["deploy"]:
         return None
     with h5py.File(run.path, "r") as f:
@@ -278,13 +401,13 @@ def columns(folder, manifest):
         for r in manifest["run"]:
             if r["variant"] != v["name"] or r["status"] != "complete":
                 continue
-            path = os.path.join(folder, r["path"])
-            if os.path.exists(path):
-                runs.append((r["seed"], C.Run(path)))
+            run = load_run(folder, r["path"])
+            if run is not None:
+                runs.append((r["seed"], run))
         out.append((v["name"], v["name"], None, list(v["set"]), v.get("doc", ""), runs))
         if any("analysis.alone_protocol=" in s for s in v["set"]):
             continue
-        if any(C.config(run.path).get("analysis", {}).get("alone_protocol", "same_length") != "same_length"
+        if any(run_config(run).get("analysis", {}).get("alone_protocol", "same_length") != "same_length"
                for _, run in runs):
             continue
         for protocol, doc in READINGS:
@@ -311,11 +434,7 @@ def evaluate(folder, manifest):
                 continue
             values, held, measured = [], 0, 0
             for _, run in runs:
-                try:
-                    _, vd = fn(run)
-                    e = eff(run)
-                except (KeyError, ValueError, IndexError, ZeroDivisionError):
-                    vd, e = "not measured", None
+                vd, e = run.cell(fn) if isinstance(run, SummaryRun) else _cell(fn, run)
                 if vd != "not measured":
                     measured += 1
                     held += vd == "held"
@@ -333,7 +452,9 @@ def provenance(folder, manifest):
     commits = set()
     for r in manifest["run"]:
         path = os.path.join(folder, r["path"])
-        if r["status"] == "complete" and os.path.exists(path):
+        if r["status"] == "complete" and not os.path.exists(path) and os.path.exists(summary_path(path)):
+            commits |= SummaryRun(summary_path(path)).commits()
+        elif r["status"] == "complete" and os.path.exists(path):
             with h5py.File(path, "r") as f:
                 for a in ("git_commit", "base_git_commit"):
                     if a in f.attrs:
@@ -442,6 +563,15 @@ def fig2a(variant, runs, seeds, path):
 def write_page(folder, out):
     man = load_manifest(folder)
     res = evaluate(folder, man)
+    # each run file's summary beside it; count the runs read from summaries alone
+    from_summaries = 0
+    for col in res.values():
+        if col["protocol"] is None:
+            for run in col["runs"]:
+                if isinstance(run, SummaryRun):
+                    from_summaries += 1
+                else:
+                    write_summary(run)
     fig_dir = os.path.join(out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
     variants = list(res)
@@ -452,7 +582,9 @@ def write_page(folder, out):
     lines += [f"Study folder `{os.path.abspath(folder)}`; base config `{man['base']}`; seeds "
               f"{', '.join(map(str, man['seeds']))}; {done} of {len(man['run'])} runs complete. Every run: "
               + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ". "
-              + provenance(folder, man), "",
+              + provenance(folder, man)
+              + (f" {from_summaries} run(s) read from their summaries (`*.summary.json`; the run files are not in "
+                 "the folder)." if from_summaries else ""), "",
               "| variant | overrides | reading | runs (seeds) | reuses |", "|---|---|---|---|---|"]
     for name, col in res.items():
         rs = [r for r in man["run"] if r["variant"] == col["source"]]
@@ -466,9 +598,9 @@ def write_page(folder, out):
                       "at report time: that key changes only the agents-alone numbers claims.py compares with, so only "
                       "the claims that read agents alone are evaluated again; the others are the same as V's "
                       "(\"as source\")."]
-    first = next((r for r in man["run"] if r["status"] == "complete"), None)
+    first = next((run for col in res.values() for run in col["runs"]), None)
     if first:
-        short = C.short_of(C.config(os.path.join(folder, first["path"])), C.NOVEL)
+        short = C.short_of(run_config(first), C.NOVEL)
         if short:
             lines += ["", f"A single run of this scale is below the counts claims.py needs to judge one run ({short}); "
                           "here the evidence is the interval over seeds, and \"held k/n\" counts claims.py's raw test "

@@ -39,6 +39,42 @@ class RobustnessTest(unittest.TestCase):
         self.assertEqual(v(*robustness.t_interval([1.0, 2.0, -3.0]), equal=True), "holds")
         self.assertEqual(v(*robustness.t_interval([1.0, 1.1, 0.9]), equal=True), "fails")
 
+    def test_summary_run_reads_cells_readings_and_refuses_other_formats(self):
+        import json
+        import tempfile
+        data = {"format": robustness.SUMMARY_FORMAT, "version": robustness.SUMMARY_VERSION,
+                "config": {"deploy": {"pairs": 100}}, "git_commit": "abc", "base_git_commit": "def",
+                "stages_complete": {"deploy": True},
+                "claims": {robustness.AS_RUN: {claims.c_trained_beat_alone.__name__: {"verdict": "did not hold",
+                                                                                      "effect": -9.5}},
+                           "training_length": {claims.c_trained_beat_alone.__name__: {"verdict": "held",
+                                                                                      "effect": 0.9}}},
+                "fig2a": {"environments": ["flat", "ice", "sand"], "types": ["weak_uniform@uniform"],
+                          "alone": {robustness.AS_RUN: [15.0, 6.0, 4.0], "training_length": [5.0, 2.0, 1.0]},
+                          "collectives": {"weak_uniform@uniform": [8.0, 5.0, 3.0]}}}
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "seed1.summary.json")
+            with open(path, "w") as fh:
+                json.dump(data, fh)
+            r = robustness.SummaryRun(path)
+            self.assertEqual(r.cell(claims.c_trained_beat_alone), ("did not hold", -9.5))
+            self.assertEqual(r.cell(claims.c_specialists), ("not measured", None))
+            self.assertEqual(r.flat, 0)
+            self.assertAlmostEqual(r.novel_mean(r.coll["weak_uniform@uniform"]), 4.0)
+            self.assertEqual(r.config["deploy"]["pairs"], 100)
+            self.assertEqual(r.commits(), {"abc", "def"})
+            t = robustness.reread(r, "training_length")
+            self.assertEqual(t.cell(claims.c_trained_beat_alone), ("held", 0.9))
+            np.testing.assert_array_equal(t.alone, [5.0, 2.0, 1.0])
+            self.assertIsNone(robustness.reread(r, "training_rate"))
+            data["version"] = robustness.SUMMARY_VERSION + 1
+            with open(path, "w") as fh:
+                json.dump(data, fh)
+            with self.assertRaises(ValueError):
+                robustness.SummaryRun(path)
+            self.assertEqual(robustness.summary_path(os.path.join(d, "v", "seed3.h5")),
+                             os.path.join(d, "v", "seed3.summary.json"))
+
     def test_every_claim_has_an_effect(self):
         for text, fn in claims.CLAIMS:
             self.assertIn(fn, robustness.EFFECTS, text)

@@ -130,6 +130,33 @@ EOF
 for v in baseline long_deploy baseline__training_length; do [ -s "$W/page/figures/fig2a_$v.png" ] || fail "no Fig. 2A for $v"; done
 [ -s "$W/page/robustness.png" ] || fail "no summary figure"
 
+echo "== the folder kept as manifest and run summaries gives the same page, and counts as complete"
+mkdir -p "$W/kept"
+cp "$W/a/study.toml" "$W/a/base.toml" "$W/kept/"
+for v in baseline long_deploy; do
+  mkdir -p "$W/kept/$v"
+  for s in 1 2; do
+    [ -s "$W/a/$v/seed$s.summary.json" ] || fail "divcoll report wrote no summary beside $v/seed$s.h5"
+    cp "$W/a/$v/seed$s.summary.json" "$W/kept/$v/"
+  done
+done
+"$D" report "$W/kept" --out "$W/page2" > "$W/page2.log" 2>&1 || { cat "$W/page2.log"; fail "divcoll report of the kept folder failed"; }
+grep -q "4 run(s) read from their summaries" "$W/page2/robustness.md" || fail "the kept folder's page does not say it read summaries"
+diff <(sed -n '/^## Claims/,$p' "$W/page/robustness.md") <(sed -n '/^## Claims/,$p' "$W/page2/robustness.md") \
+  || fail "the page from summaries differs from the page from run files"
+cmp "$W/page/figures/fig2a_baseline__training_length.png" "$W/page2/figures/fig2a_baseline__training_length.png" \
+  || fail "Fig. 2A from summaries differs"
+"$D" study "$STUDY" --out "$W/kept" --resume > "$W/kept.log" 2>&1 || { cat "$W/kept.log"; fail "resume of the kept folder failed"; }
+[ "$(grep -c "complete in" "$W/kept.log")" = 4 ] || { cat "$W/kept.log"; fail "the kept runs were not all counted complete"; }
+ls "$W/kept"/*/*.h5 > /dev/null 2>&1 && fail "the resume of the kept folder computed a run"
+# a run to compute whose base run is kept only as a summary is refused with a message, not a missing-file error
+rm "$W/kept/long_deploy/seed2.summary.json"
+set +e; "$D" study "$STUDY" --out "$W/kept" --resume > "$W/kept2.log" 2>&1; rc=$?; set -e
+[ "$rc" = 2 ] || { cat "$W/kept2.log"; fail "a run reusing a summary-only base: exit $rc, not 2"; }
+grep -q "reuses the stages before deploy of baseline/seed2.h5, whose run file is not in" "$W/kept2.log" \
+  || { cat "$W/kept2.log"; fail "no clear message for a summary-only base"; }
+echo "summaries: ok"
+
 echo "== bad study files are refused before any work"
 sed 's/set = \["deploy.episode_steps=300"\]/set = ["deploy.episode_stepz=300"]/' "$STUDY" > "$W/bad1.toml"
 sed 's/set = \["deploy.episode_steps=300"\]/set = ["deploy.episode_steps=0"]/' "$STUDY" > "$W/bad2.toml"
