@@ -652,16 +652,38 @@ def main(argv=None):
     ap.add_argument("study", help="study folder (divcoll study --out DIR)")
     ap.add_argument("--out", help="output folder (default DIR/robustness)")
     ap.add_argument("--divcoll", help="accepted for `divcoll report`; unused")
+    ap.add_argument("--keep", metavar="DEST", help="also copy the study as its manifest, base config and run summaries "
+                                                   "(no run files) into DEST, e.g. postprocess/gallery/studies/NAME")
     a = ap.parse_args(argv)
     out = a.out or os.path.join(a.study, "robustness")
     try:
         path, res = write_page(a.study, out)
+        kept = keep(a.study, a.keep) if a.keep else None
     except (OSError, ValueError, tomllib.TOMLDecodeError) as e:
         print(f"robustness: {e}", file=sys.stderr)
         return 2
     n = sum(len(r["cells"]) for r in res.values())
     print(f"robustness: wrote {path} ({len(C.CLAIMS)} claims × {len(res)} variants = {n} cells)")
+    if kept is not None:
+        print(f"robustness: kept the study in {a.keep} ({kept} run summaries; `divcoll report {a.keep}` redraws the page)")
     return 0
+
+
+def keep(folder, dest):
+    """copies the study's manifest, base config and run summaries into dest; returns the number of summaries"""
+    import shutil
+    man = load_manifest(folder)
+    os.makedirs(dest, exist_ok=True)
+    for name in ("study.toml", man.get("base_copy", "base.toml")):
+        shutil.copy2(os.path.join(folder, name), os.path.join(dest, name))
+    n = 0
+    for r in man["run"]:
+        src = summary_path(os.path.join(folder, r["path"]))
+        if r["status"] == "complete" and os.path.exists(src):
+            os.makedirs(os.path.dirname(os.path.join(dest, r["path"])), exist_ok=True)
+            shutil.copy2(src, summary_path(os.path.join(dest, r["path"])))
+            n += 1
+    return n
 
 
 if __name__ == "__main__":
