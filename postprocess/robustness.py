@@ -269,8 +269,11 @@ def summarize(run):
             readings[protocol] = rr
     claims = {}
     for key, r in readings.items():
-        claims[key] = {fn.__name__: dict(zip(("verdict", "effect"), (lambda c: (c[0], _finite_or_none(c[1])))(_cell(fn, r))))
-                       for _, fn in C.CLAIMS if key == AS_RUN or fn in ALONE_CLAIMS}
+        claims[key] = {}
+        for _, fn in C.CLAIMS:
+            if key == AS_RUN or fn in ALONE_CLAIMS:
+                vd, e = _cell(fn, r)
+                claims[key][fn.__name__] = {"verdict": vd, "effect": _finite_or_none(e)}
     fig = None
     if run.has["deploy"]:
         fig = {"environments": run.envs, "types": run.types,
@@ -286,7 +289,7 @@ def summarize(run):
 
 
 def write_summary(run):
-    """writes run's summary beside its run file (atomically); returns its path"""
+    """writes the summary of a claims.Run beside its run file (atomically); returns its path"""
     import json
     path = summary_path(run.path)
     tmp = path + ".tmp"
@@ -298,11 +301,12 @@ def write_summary(run):
 
 
 class SummaryRun:
-    """a run read from its summary: what evaluate() and fig2a() use of a claims.Run"""
+    """a run read from its summary: what evaluate() and fig2a() use of a claims.Run. from_file: the summary was
+    written from the run file beside it just now (else the folder holds the summary alone)"""
 
-    def __init__(self, path, data=None, reading=AS_RUN):
+    def __init__(self, path, data=None, reading=AS_RUN, from_file=False):
         import json
-        self.path = path
+        self.path, self.from_file = path, from_file
         if data is None:
             with open(path) as fh:
                 data = json.load(fh)
@@ -329,21 +333,18 @@ class SummaryRun:
         return c["verdict"], c["effect"]
 
     def reread(self, protocol):
-        return SummaryRun(self.path, self.data, protocol) if protocol in self.data["claims"] else None
+        return SummaryRun(self.path, self.data, protocol, self.from_file) if protocol in self.data["claims"] else None
 
     def commits(self):
         return {self.data[a] for a in ("git_commit", "base_git_commit") if a in self.data}
 
 
-def run_config(run):
-    return run.config if isinstance(run, SummaryRun) else C.config(run.path)
-
-
 def load_run(folder, rel):
-    """the run at `rel` in the study folder: its run file if there, else its summary; None if neither"""
+    """the run at `rel` in the study folder, read from its summary: written anew from the run file when that is
+    there, else the one kept; None if neither. The page reads every run the same way, from what is on disk."""
     path = os.path.join(folder, rel)
     if os.path.exists(path):
-        return C.Run(path)
+        return SummaryRun(write_summary(C.Run(path)), from_file=True)
     if os.path.exists(summary_path(path)):
         return SummaryRun(summary_path(path))
     return None
@@ -375,8 +376,6 @@ def reread(run, protocol):
     """a copy of the claims.Run with agents alone read under `protocol` (None when the run cannot be)"""
     import h5py
     import summary
-    if isinstance(run, SummaryRun):
-        return run.reread(protocol)
     if not run.has["deploy"]:
         return None
     with h5py.File(run.path, "r") as f:
@@ -407,11 +406,11 @@ def columns(folder, manifest):
         out.append((v["name"], v["name"], None, list(v["set"]), v.get("doc", ""), runs))
         if any("analysis.alone_protocol=" in s for s in v["set"]):
             continue
-        if any(run_config(run).get("analysis", {}).get("alone_protocol", "same_length") != "same_length"
+        if any(run.config.get("analysis", {}).get("alone_protocol", "same_length") != "same_length"
                for _, run in runs):
             continue
         for protocol, doc in READINGS:
-            rr = [(seed, x) for seed, x in ((seed, reread(run, protocol)) for seed, run in runs) if x is not None]
+            rr = [(seed, x) for seed, x in ((seed, run.reread(protocol)) for seed, run in runs) if x is not None]
             if runs and not rr:
                 continue
             out.append((f"{v['name']} · {protocol}", v["name"], protocol,
@@ -434,7 +433,7 @@ def evaluate(folder, manifest):
                 continue
             values, held, measured = [], 0, 0
             for _, run in runs:
-                vd, e = run.cell(fn) if isinstance(run, SummaryRun) else _cell(fn, run)
+                vd, e = run.cell(fn)
                 if vd != "not measured":
                     measured += 1
                     held += vd == "held"
@@ -446,19 +445,11 @@ def evaluate(folder, manifest):
     return out
 
 
-def provenance(folder, manifest):
-    """text: the divcoll commits of the complete run files, and the commit of this postprocessing tree"""
-    import h5py
+def provenance(runs):
+    """text: the divcoll commits of the complete runs (SummaryRun), and the commit of this postprocessing tree"""
     commits = set()
-    for r in manifest["run"]:
-        path = os.path.join(folder, r["path"])
-        if r["status"] == "complete" and not os.path.exists(path) and os.path.exists(summary_path(path)):
-            commits |= SummaryRun(summary_path(path)).commits()
-        elif r["status"] == "complete" and os.path.exists(path):
-            with h5py.File(path, "r") as f:
-                for a in ("git_commit", "base_git_commit"):
-                    if a in f.attrs:
-                        commits.add(C._s(f.attrs[a]))
+    for run in runs:
+        commits |= run.commits()
     try:
         here = subprocess.run(["git", "-C", HERE, "describe", "--always", "--dirty", "--abbrev=12"],
                               capture_output=True, text=True, timeout=30).stdout.strip() or "unknown"
@@ -563,15 +554,9 @@ def fig2a(variant, runs, seeds, path):
 def write_page(folder, out):
     man = load_manifest(folder)
     res = evaluate(folder, man)
-    # each run file's summary beside it; count the runs read from summaries alone
-    from_summaries = 0
-    for col in res.values():
-        if col["protocol"] is None:
-            for run in col["runs"]:
-                if isinstance(run, SummaryRun):
-                    from_summaries += 1
-                else:
-                    write_summary(run)
+    # every complete run once (the report-time readings are columns of the same runs)
+    runs = [run for col in res.values() if col["protocol"] is None for run in col["runs"]]
+    from_summaries = sum(not run.from_file for run in runs)
     fig_dir = os.path.join(out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
     variants = list(res)
@@ -582,7 +567,7 @@ def write_page(folder, out):
     lines += [f"Study folder `{os.path.abspath(folder)}`; base config `{man['base']}`; seeds "
               f"{', '.join(map(str, man['seeds']))}; {done} of {len(man['run'])} runs complete. Every run: "
               + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ". "
-              + provenance(folder, man)
+              + provenance(runs)
               + (f" {from_summaries} run(s) read from their summaries (`*.summary.json`; the run files are not in "
                  "the folder)." if from_summaries else ""), "",
               "| variant | overrides | reading | runs (seeds) | reuses |", "|---|---|---|---|---|"]
@@ -598,9 +583,8 @@ def write_page(folder, out):
                       "at report time: that key changes only the agents-alone numbers claims.py compares with, so only "
                       "the claims that read agents alone are evaluated again; the others are the same as V's "
                       "(\"as source\")."]
-    first = next((run for col in res.values() for run in col["runs"]), None)
-    if first:
-        short = C.short_of(run_config(first), C.NOVEL)
+    if runs:
+        short = C.short_of(runs[0].config, C.NOVEL)
         if short:
             lines += ["", f"A single run of this scale is below the counts claims.py needs to judge one run ({short}); "
                           "here the evidence is the interval over seeds, and \"held k/n\" counts claims.py's raw test "

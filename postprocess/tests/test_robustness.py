@@ -63,10 +63,10 @@ class RobustnessTest(unittest.TestCase):
             self.assertAlmostEqual(r.novel_mean(r.coll["weak_uniform@uniform"]), 4.0)
             self.assertEqual(r.config["deploy"]["pairs"], 100)
             self.assertEqual(r.commits(), {"abc", "def"})
-            t = robustness.reread(r, "training_length")
+            t = r.reread("training_length")
             self.assertEqual(t.cell(claims.c_trained_beat_alone), ("held", 0.9))
             np.testing.assert_array_equal(t.alone, [5.0, 2.0, 1.0])
-            self.assertIsNone(robustness.reread(r, "training_rate"))
+            self.assertIsNone(r.reread("training_rate"))
             data["version"] = robustness.SUMMARY_VERSION + 1
             with open(path, "w") as fh:
                 json.dump(data, fh)
