@@ -3,6 +3,9 @@
 #include <mpi.h>
 
 #include <cstdio>
+#include <cstring>
+#include <limits>
+#include <vector>
 #include <filesystem>
 #include <string>
 
@@ -22,6 +25,24 @@ int size_of(MPI_Comm c = MPI_COMM_WORLD) {
   int s = 1;
   MPI_Comm_size(c, &s);
   return s;
+}
+
+// pack and unpack (mpi/protocol.hpp): a payload is read where it lies, also from inside a larger buffer
+// (as the master reads a block's results), and the bytes do not depend on how the stream was written
+TEST(Protocol, PackUnpackRoundTripInPlace) {
+  const std::vector<double> g = {1.5, -0.0, 3e-300, std::numeric_limits<double>::quiet_NaN(), 7.25};
+  const std::string a = mpi::pack(g);
+  EXPECT_EQ(a.size(), sizeof(uint64_t) + g.size() * sizeof(double));  // the count, then the elements
+  std::string framed = "head" + a + "tail";
+  const auto back = mpi::unpack<std::vector<double>>(framed.data() + 4, a.size());
+  ASSERT_EQ(back.size(), g.size());
+  for (size_t i = 0; i < g.size(); ++i)
+    EXPECT_EQ(std::memcmp(&back[i], &g[i], sizeof(double)), 0) << "element " << i << " changed its bits";
+  EXPECT_EQ(mpi::pack(back), a);
+  EXPECT_EQ(mpi::unpack<std::string>(mpi::pack(std::string(100000, 'q'))), std::string(100000, 'q'));
+  EXPECT_TRUE(mpi::unpack<std::vector<double>>(mpi::pack(std::vector<double>{})).empty());
+  // a payload cut short is an error, not a read past its end
+  EXPECT_ANY_THROW(mpi::unpack<std::vector<double>>(a.data(), a.size() - 3));
 }
 
 TEST(Farm, EveryItemIsComputedOnceAndResultsArriveInItemOrder) {
