@@ -3,7 +3,7 @@
 jobs/bench-farm.sh (`divcoll bench-farm` at 8, 16, 32 ranks).
 
     /usr/bin/python3 postprocess/farm_model.py OUT/farm.csv [--paper configs/paper.toml] [--ranks 64 512]
-                                               [--item-ms 12.5 6.25] [--pairs-per-item 1]
+                                               [--item-ms 6.25] [--pairs-per-item 1] [--cost fit|top]
 
 One round of n items of t seconds on p ranks: the master only coordinates (W = p - 1 workers; with p <= 2
 it computes too, W = p). It sends every worker its first block one message after another, then answers
@@ -13,7 +13,13 @@ next task, and, when the stage folds during the round, the fold); a stage that f
 
     T(p) = max(ceil(n / W) t + W c_task, n c_serve) + n c_fold_after,     efficiency = n t / (p T(p)).
 
-c_serve, c_task and c_fold are the rows of the largest rank count in the CSV (guided blocks). Items per
+c_task and c_fold are the rows of the largest rank count in the CSV (guided blocks). c_serve (--cost fit, the
+default) comes from every guided row of a fold mode: the master's CPU per round is fitted as a w + b n (w the
+round's wall time, n its items; least squares over the rank counts). a is the share of a core the master spends
+between messages while it waits (waking from its sleeps, polling MPI), which does not grow with the ranks; b is
+its CPU per item. At small rank counts the waiting dominates the CPU per item (26 µs at 8 ranks, 13 at 32 in one
+sweep), so the largest rank count's row (--cost top, the model before) still counts some of it. A master that
+waits a share a of a round serves n items in n b / (1 - a), the c_serve the model uses. Items per
 round and the result size are the paper config's connectors and specialists training rounds (one pair
 episode with gradient per item; its result is the connector's gradient, 1473 doubles). Assumes a network
 whose per-message CPU cost at the master is no higher than this machine's shared memory, and leaves out
@@ -50,10 +56,43 @@ def read_costs(path):
         raise InputError(f"{path}: not a bench-farm CSV (columns {', '.join(sorted(need))})")
     guided = [r for r in rows if r["block"] == "0"] or rows
     top = max(int(r["ranks"]) for r in guided)
-    out = {r["fold"]: r for r in guided if int(r["ranks"]) == top}
+    out = {r["fold"]: dict(r) for r in guided if int(r["ranks"]) == top}
     if "after" not in out:
         raise InputError(f"{path}: no fold=after row at {top} ranks")
+    for fold, r in out.items():
+        r["fit"] = fit_serve([g for g in guided if g["fold"] == fold])
     return top, out
+
+
+def fit_serve(rows):
+    """(a, b µs, c_serve µs) of the master's CPU per round = a * wall + b * items over the rows (several rank
+    counts), or None with fewer than two rank counts or a fit outside 0 <= a < 1, b > 0."""
+    pts = []
+    for r in rows:
+        n = float(r["items"])
+        pts.append((float(r["round_s"]), n, float(r["master_cpu_us_per_item"]) * 1e-6 * n))
+    if len({(w, n) for w, n, _ in pts}) < 2:
+        return None
+    sww = sum(w * w for w, _, _ in pts)
+    swn = sum(w * n for w, n, _ in pts)
+    snn = sum(n * n for _, n, _ in pts)
+    swy = sum(w * y for w, _, y in pts)
+    sny = sum(n * y for _, n, y in pts)
+    det = sww * snn - swn * swn
+    if abs(det) <= 1e-12 * sww * snn:
+        return None
+    a = (swy * snn - sny * swn) / det
+    b = (sww * sny - swn * swy) / det
+    if not (0 <= a < 1 and b > 0):
+        return None
+    return a, b * 1e6, b * 1e6 / (1 - a)
+
+
+def serve_cost(row, cost):
+    """c_serve (µs per item) of one fold mode's row: the fit's, or the row's own CPU per item."""
+    if cost == "fit" and row.get("fit"):
+        return row["fit"][2]
+    return float(row["master_cpu_us_per_item"])
 
 
 def round_time(n, t, p, c_serve, c_task, c_fold_after):
@@ -76,7 +115,7 @@ def paper_rounds(path):
             "specialists": novel * s["replicates"] * c["batch_pairs"]}
 
 
-def table(costs, rounds, ranks, item_ms, pairs_per_item=(1,)):
+def table(costs, rounds, ranks, item_ms, pairs_per_item=(1,), cost="fit"):
     top, rows = costs
     lines = ["| round | items | item (ms) | fold | " + " | ".join(f"{p} ranks" for p in ranks) + " |",
              "|---|---|---|---|" + "---|" * len(ranks)]
@@ -87,7 +126,7 @@ def table(costs, rounds, ranks, item_ms, pairs_per_item=(1,)):
                 if fold not in rows:
                     continue
                 r = rows[fold]
-                c_serve = float(r["master_cpu_us_per_item"])
+                c_serve = serve_cost(r, cost)
                 c_fold = float(r["fold_us_per_result"]) if fold == "after" else 0.0
                 cells = []
                 for p in ranks:
@@ -96,11 +135,21 @@ def table(costs, rounds, ranks, item_ms, pairs_per_item=(1,)):
                 what = f"{stage} training" + (f", {b} pairs per item" if b > 1 else "")
                 lines.append(f"| {what} | {n} | {ms:g} | {fold} the round | " + " | ".join(cells) + " |")
     after = rows["after"]
-    caption = (f"Costs from the {top}-rank rows: c_serve = {float(after['master_cpu_us_per_item']):.2f} µs per item "
-               f"(fold after)" + (f", {float(rows['during']['master_cpu_us_per_item']):.2f} µs with the fold during the "
-                                  f"round" if "during" in rows else "")
-               + f", c_task = {float(after['task_us_per_msg']):.2f} µs per task message, c_fold = "
-               f"{float(after['fold_us_per_result']):.2f} µs per result, {float(after['bytes_per_result']):.0f} B per result.")
+    parts = []
+    for fold in ("after", "during"):
+        if fold not in rows:
+            continue
+        r, label = rows[fold], "fold after" if fold == "after" else "with the fold during the round"
+        if cost == "fit" and r.get("fit"):
+            a, b, c = r["fit"]
+            parts.append(f"c_serve = {c:.2f} µs per item {label} (fit over the rank counts: {b:.2f} µs per item, "
+                         f"waiting {a:.1%} of a core; the {top}-rank row alone: "
+                         f"{float(r['master_cpu_us_per_item']):.2f} µs)")
+        else:
+            parts.append(f"c_serve = {float(r['master_cpu_us_per_item']):.2f} µs per item {label} ({top}-rank row)")
+    caption = ("Costs: " + "; ".join(parts) + f"; c_task = {float(after['task_us_per_msg']):.2f} µs per task message, "
+               f"c_fold = {float(after['fold_us_per_result']):.2f} µs per result, {float(after['bytes_per_result']):.0f} "
+               f"B per result ({top}-rank rows).")
     return lines, caption
 
 
@@ -109,8 +158,11 @@ def main(argv=None):
     ap.add_argument("csv", help="farm.csv of jobs/bench-farm.sh")
     ap.add_argument("--paper", default=PAPER, help="config whose round sizes to model (default configs/paper.toml)")
     ap.add_argument("--ranks", type=int, nargs="+", default=[64, 512])
-    ap.add_argument("--item-ms", type=float, nargs="+", default=[12.5, 6.25],
-                    help="ms of one item (pair episode with gradient): 12.5 at 80k pair-steps/s, 6.25 at twice that")
+    ap.add_argument("--item-ms", type=float, nargs="+", default=[6.25],
+                    help="ms of one item (pair episode with gradient): 6.25 at 160k pair-steps/s (the engine since "
+                         "issue 10.3), 12.5 at dea5a14's 80k")
+    ap.add_argument("--cost", choices=["fit", "top"], default="fit",
+                    help="c_serve from a fit over every rank count (default) or the largest rank count's row")
     ap.add_argument("--pairs-per-item", type=int, nargs="+", default=[1],
                     help="pair episodes per item, their gradients summed by the worker (1: today's stages)")
     a = ap.parse_args(argv)
@@ -119,7 +171,8 @@ def main(argv=None):
             raise InputError("--ranks, --item-ms and --pairs-per-item must be positive")
         if not os.path.isfile(a.paper):
             raise InputError(f"{a.paper}: no such config")
-        lines, caption = table(read_costs(a.csv), paper_rounds(a.paper), a.ranks, a.item_ms, a.pairs_per_item)
+        lines, caption = table(read_costs(a.csv), paper_rounds(a.paper), a.ranks, a.item_ms, a.pairs_per_item,
+                               a.cost)
     except (InputError, KeyError, ValueError, tomllib.TOMLDecodeError) as e:
         print(f"farm_model: {e}", file=sys.stderr)
         return 2

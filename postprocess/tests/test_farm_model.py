@@ -21,8 +21,15 @@ HEAD = ("ranks,computing,items,item_ms,result_bytes,block,depth,fold,round_s,ide
         "bytes_per_result,task_msgs_per_round,result_msgs_per_round,fold_us_per_result")
 
 
-def row(ranks, block, fold, serve, task, fold_us):
-    return f"{ranks},{ranks - 1},4000,2,11800,{block},2,{fold},1,1,1,{serve},{task},0,0,0,11817,100,100,{fold_us}"
+def row(ranks, block, fold, serve, task, fold_us, round_s=1):
+    return (f"{ranks},{ranks - 1},4000,2,11800,{block},2,{fold},{round_s},1,1,{serve},{task},0,0,0,11817,100,100,"
+            f"{fold_us}")
+
+
+def waiting_master_row(ranks, fold, a, b_us, item_ms=6.0, items=4000):
+    """A row whose master spends a share a of each round waiting and b_us per item: CPU per item a w / n + b."""
+    w = items * item_ms * 1e-3 / (ranks - 1)
+    return row(ranks, 0, fold, a * w / items * 1e6 + b_us, 2.0, 3.0, round_s=w)
 
 
 def write_csv(folder, rows):
@@ -71,12 +78,38 @@ class Costs(unittest.TestCase):
             farm = E.read_farm(path)
             self.assertEqual((farm.c_serve, farm.c_task), (7.0, 2.0))
 
+    def test_fit_separates_waiting_from_the_cost_per_item(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = write_csv(d, [waiting_master_row(p, f, 0.02, b) for p in (8, 16, 32)
+                                 for f, b in (("after", 5.0), ("during", 8.0))])
+            top, rows = F.read_costs(path)
+            a, b, c = rows["during"]["fit"]
+            self.assertAlmostEqual(a, 0.02, places=9)
+            self.assertAlmostEqual(b, 8.0, places=6)
+            self.assertAlmostEqual(c, 8.0 / 0.98, places=6)
+            self.assertAlmostEqual(F.serve_cost(rows["after"], "fit"), 5.0 / 0.98, places=6)
+            # the 32-rank row alone still counts the waiting: a w / n on top of b
+            self.assertGreater(F.serve_cost(rows["during"], "top"), 8.0 + 0.02 * 0.7 / 4000 * 1e6 - 1e-9)
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):
+                self.assertEqual(F.main([path, "--ranks", "512", "--item-ms", "6"]), 0)
+            T, e = F.round_time(4000, 6e-3, 512, 8.0 / 0.98, 2.0, 0.0)
+            self.assertIn(f"{e:.0%} ({T * 1e3:.0f} ms)", out.getvalue())
+            self.assertIn("waiting 2.0% of a core", out.getvalue())
+
+    def test_one_rank_count_cannot_be_fitted(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = write_csv(d, [row(32, 0, "after", 5.0, 2.0, 3.0)])
+            _, rows = F.read_costs(path)
+            self.assertIsNone(rows["after"]["fit"])
+            self.assertEqual(F.serve_cost(rows["after"], "fit"), 5.0)
+
     def test_table_has_a_row_per_stage_item_time_and_fold(self):
         with tempfile.TemporaryDirectory() as d:
             path = write_csv(d, [row(32, 0, "after", 5.0, 2.0, 3.0), row(32, 0, "during", 7.0, 2.0, 3.0)])
             out = io.StringIO()
             with contextlib.redirect_stdout(out):
-                self.assertEqual(F.main([path, "--ranks", "64", "512", "--item-ms", "10"]), 0)
+                self.assertEqual(F.main([path, "--ranks", "64", "512", "--item-ms", "10", "--cost", "top"]), 0)
             lines = [x for x in out.getvalue().splitlines() if x.startswith("| connectors") or x.startswith("| specialists")]
             self.assertEqual(len(lines), 4)  # 2 stages x 1 item time x 2 folds
             # connectors: 4 kinds x 10 replicates x 100 pairs; at 64 ranks ceil(4000 / 63) = 64 items of 10 ms
