@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
 #include <set>
 
 #include "collective/pairs.hpp"
@@ -10,6 +11,10 @@
 #include "testing.hpp"
 
 namespace divcoll {
+namespace collective {
+// how gtest prints a Tether parameter (else as raw bytes): "Tether{k 5000, amplitude 0.6}"
+void PrintTo(const Tether& t, std::ostream* os) { *os << "Tether{k " << t.stiffness << ", amplitude " << t.amplitude << "}"; }
+}  // namespace collective
 namespace {
 
 collective::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
