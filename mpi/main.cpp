@@ -71,6 +71,9 @@ int main(int argc, char** argv) {
   rp->add_option("run", rep.run, "run file, or a study folder (the robustness page)")->required()->check(CLI::ExistingPath);
   rp->add_option("--out", rep.out, "output folder (report.md, report.html, table_s1.md, figures/)");
   rp->add_flag("--movie", rep.movie, "also render the supplementary movie (MP4, ffmpeg) into the page");
+  rp->add_option("--keep", rep.keep,
+                 "study folder only: also copy the study (manifest, base config, run summaries; no run files) to "
+                 "this folder, e.g. postprocess/gallery/studies/NAME, from which `divcoll report` redraws the page");
 
   cli::MovieArgs mov;
   auto* mv = app.add_subcommand("movie", "the paper's Supplementary Movie from a run file, as MP4 (ffmpeg)");

@@ -56,6 +56,7 @@ int demo(const DemoArgs& a);
 struct ReportArgs {
   std::string run, out = "out/report";
   bool movie = false;  // also render the supplementary movie into the page
+  std::string keep;    // a study folder only: also copy it as manifest, base config and run summaries to here
 };
 int report(const ReportArgs& a);  // replaces the process with Python; returns only by throwing
 

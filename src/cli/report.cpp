@@ -130,8 +130,13 @@ int report(const ReportArgs& a) {
   // a study folder (divcoll study --out DIR) gets the robustness page, by default in DIR/robustness
   if (fs::is_directory(a.run)) {
     const std::string out = a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
-    return exec_python("robustness.py", {a.run, "--out", out});
+    std::vector<std::string> args = {a.run, "--out", out};
+    if (!a.keep.empty()) args.insert(args.end(), {"--keep", a.keep});
+    return exec_python("robustness.py", args);
   }
+  if (!a.keep.empty())
+    throw InputError(msg() << "report --keep " << a.keep << ": --keep copies a study folder, and " << a.run
+                           << " is a run file");
   std::vector<std::string> args = {a.run, "--out", a.out};
   if (a.movie) args.push_back("--movie");
   return exec_python("report.py", args);

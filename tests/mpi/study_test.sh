@@ -136,9 +136,13 @@ for v in baseline long_deploy; do
     [ -s "$W/a/$v/seed$s.summary.json" ] || fail "divcoll report wrote no summary beside $v/seed$s.h5"
   done
 done
-/usr/bin/python3 "$SRC/postprocess/robustness.py" "$W/a" --out "$W/page_keep" --keep "$W/kept" | grep -q "4 run summaries" \
-  || fail "robustness.py --keep did not keep 4 summaries"
+"$D" report "$W/a" --out "$W/page_keep" --keep "$W/kept" > "$W/keep.log" 2>&1 || { cat "$W/keep.log"; fail "report --keep failed"; }
+grep -q "4 run summaries" "$W/keep.log" || { cat "$W/keep.log"; fail "divcoll report --keep did not keep 4 summaries"; }
 ls "$W/kept"/*/*.h5 > /dev/null 2>&1 && fail "--keep copied run files"
+# --keep is for study folders: with a run file it is refused before anything is written
+set +e; "$D" report "$W/a/baseline/seed1.h5" --out "$W/nopage" --keep "$W/kept_bad" > "$W/keep_bad.log" 2>&1; rc=$?; set -e
+[ "$rc" = 2 ] && grep -q "is a run file" "$W/keep_bad.log" && [ ! -e "$W/kept_bad" ] && [ ! -e "$W/nopage" ] \
+  || { cat "$W/keep_bad.log"; fail "report --keep of a run file: exit $rc"; }
 "$D" report "$W/kept" --out "$W/page2" > "$W/page2.log" 2>&1 || { cat "$W/page2.log"; fail "divcoll report of the kept folder failed"; }
 grep -q "4 run(s) read from their summaries" "$W/page2/robustness.md" || fail "the kept folder's page does not say it read summaries"
 diff <(sed -n '/^## Claims/,$p' "$W/page/robustness.md") <(sed -n '/^## Claims/,$p' "$W/page2/robustness.md") \
