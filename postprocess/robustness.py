@@ -507,26 +507,52 @@ def summary_figure(res, path):
 
 # ---- Fig. 2A per variant ----------------------------------------------------------------------------------------
 
+def fig2a_values(runs):
+    """[(label, flat values per seed, novel-mean values per seed)] of agents alone and every collective type, over
+    the runs with a complete deploy stage (the numbers behind Fig. 2A and its table)"""
+    runs = [r for r in runs if r.has["deploy"]]
+    if not runs:
+        return []
+    out = []
+    for k, lab in enumerate(["agents alone"] + runs[0].types):
+        flat, novel = [], []
+        for r in runs:
+            arr = r.alone if k == 0 else r.coll.get(lab)
+            if arr is None:
+                continue
+            flat.append(float(arr[r.flat]))
+            novel.append(r.novel_mean(arr))
+        out.append((lab, flat, novel))
+    return out
+
+
+def fig2a_table(values):
+    """markdown rows of Fig. 2A's numbers: mean over seeds [t 95% interval] and each seed's value, flat and novel"""
+    def cell(vals):
+        m, lo, hi, n = t_interval(vals)
+        ci = f" [{lo:.2f}, {hi:.2f}]" if np.isfinite(lo) else ""
+        return f"{m:.2f}{ci} ({', '.join(f'{v:.2f}' for v in vals)})"
+    lines = ["| travel, BL: mean over seeds [t 95% interval] (each seed) | flat | novel (mean of the environment means) |",
+             "|---|---|---|"]
+    for lab, flat, novel in values:
+        lines.append(f"| {lab.replace('@', ' on ')} | {cell(flat)} | {cell(novel)} |")
+    return lines
+
+
 def fig2a(variant, runs, seeds, path):
     """flat and novel travel of agents alone and every collective type: mean over seeds, t 95% interval over
     seeds as the error bar, each seed a dot"""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs = [r for r in runs if r.has["deploy"]]
-    if not runs:
+    values = fig2a_values(runs)
+    if not values:
         return False
-    types = runs[0].types
-    labels = ["agents alone"] + types
+    labels = [lab for lab, _, _ in values]
     fig, axes = plt.subplots(1, 2, figsize=(max(6, 0.9 * len(labels) + 2), 3.6), sharey=True)
     for ax, where in zip(axes, ["flat", "novel"]):
-        for k, lab in enumerate(labels):
-            vals = []
-            for r in runs:
-                arr = r.alone if k == 0 else r.coll.get(lab)
-                if arr is None:
-                    continue
-                vals.append(arr[r.flat] if where == "flat" else r.novel_mean(arr))
+        for k, (lab, flat, novel) in enumerate(values):
+            vals = flat if where == "flat" else novel
             m, lo, hi, n = t_interval(vals)
             kind = lab.split("@")[0]
             color = "#404040" if k == 0 else ("#2166ac" if "diverse" in kind else "#e66101")
@@ -622,7 +648,7 @@ def write_page(folder, out):
         png = os.path.join(fig_dir, f"fig2a_{v.replace(' · ', '__')}.png")
         if fig2a(v, res[v]["runs"], res[v]["seeds"], png):
             rel = os.path.relpath(png, out)
-            lines += [f"### {v}", "", f"![{rel}]({rel})", ""]
+            lines += [f"### {v}", "", f"![{rel}]({rel})", ""] + fig2a_table(fig2a_values(res[v]["runs"])) + [""]
         else:
             lines += [f"### {v}", "", "No complete deploy stage in this variant's runs.", ""]
     path = os.path.join(out, "robustness.md")

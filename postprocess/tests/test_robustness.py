@@ -75,6 +75,26 @@ class RobustnessTest(unittest.TestCase):
             self.assertEqual(robustness.summary_path(os.path.join(d, "v", "seed3.h5")),
                              os.path.join(d, "v", "seed3.summary.json"))
 
+    def test_fig2a_numbers_over_seeds(self):
+        def run(alone, coll, deploy=True):
+            return robustness.SummaryRun("x", {
+                "format": robustness.SUMMARY_FORMAT, "version": robustness.SUMMARY_VERSION, "config": {},
+                "stages_complete": {"deploy": deploy}, "claims": {robustness.AS_RUN: {}},
+                "fig2a": {"environments": ["ice", "flat", "sand"], "types": ["weak_diverse@diverse"],
+                          "alone": {robustness.AS_RUN: alone}, "collectives": {"weak_diverse@diverse": coll}}})
+        runs = [run([6.0, 15.0, 4.0], [3.0, 7.0, 1.0]), run([5.0, 16.0, 3.0], [4.0, 8.0, 2.0]),
+                run([7.0, 17.0, 5.0], [5.0, 9.0, 3.0]), run([0.0, 99.0, 0.0], [0.0, 99.0, 0.0], deploy=False)]
+        values = robustness.fig2a_values(runs)  # the run without a deploy stage is left out
+        self.assertEqual([v[0] for v in values], ["agents alone", "weak_diverse@diverse"])
+        self.assertEqual(values[0][1], [15.0, 16.0, 17.0])              # flat is found by name, not position
+        self.assertEqual(values[1][2], [2.0, 3.0, 4.0])                 # novel: mean of the other environments
+        rows = robustness.fig2a_table(values)
+        half = 4.302652729749464 / np.sqrt(3)                           # s = 1 over 3 seeds
+        self.assertEqual(rows[2], f"| agents alone | 16.00 [{16 - half:.2f}, {16 + half:.2f}] (15.00, 16.00, 17.00) | "
+                                  f"5.00 [{5 - half:.2f}, {5 + half:.2f}] (5.00, 4.00, 6.00) |")
+        self.assertTrue(rows[3].startswith("| weak_diverse on diverse | 8.00 ["))
+        self.assertEqual(robustness.fig2a_values([runs[3]]), [])
+
     def test_every_claim_has_an_effect(self):
         for text, fn in claims.CLAIMS:
             self.assertIn(fn, robustness.EFFECTS, text)
