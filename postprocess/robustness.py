@@ -301,7 +301,7 @@ def write_summary(run):
 
 
 class SummaryRun:
-    """a run read from its summary: what evaluate() and fig2a() use of a claims.Run. from_file: the summary was
+    """a run read from its summary: what evaluate() and fig2a_values() use of a claims.Run. from_file: the summary was
     written from the run file beside it just now (else the folder holds the summary alone)"""
 
     def __init__(self, path, data=None, reading=AS_RUN, from_file=False):
@@ -539,13 +539,12 @@ def fig2a_table(values):
     return lines
 
 
-def fig2a(variant, runs, seeds, path):
-    """flat and novel travel of agents alone and every collective type: mean over seeds, t 95% interval over
-    seeds as the error bar, each seed a dot"""
+def fig2a(variant, values, seeds, path):
+    """flat and novel travel of agents alone and every collective type (fig2a_values): mean over seeds, t 95%
+    interval over seeds as the error bar, each seed a dot"""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    values = fig2a_values(runs)
     if not values:
         return False
     labels = [lab for lab, _, _ in values]
@@ -646,9 +645,10 @@ def write_page(folder, out):
     lines += ["", "## Fig. 2A per variant", ""]
     for v in variants:
         png = os.path.join(fig_dir, f"fig2a_{v.replace(' · ', '__')}.png")
-        if fig2a(v, res[v]["runs"], res[v]["seeds"], png):
+        values = fig2a_values(res[v]["runs"])
+        if fig2a(v, values, res[v]["seeds"], png):
             rel = os.path.relpath(png, out)
-            lines += [f"### {v}", "", f"![{rel}]({rel})", ""] + fig2a_table(fig2a_values(res[v]["runs"])) + [""]
+            lines += [f"### {v}", "", f"![{rel}]({rel})", ""] + fig2a_table(values) + [""]
         else:
             lines += [f"### {v}", "", "No complete deploy stage in this variant's runs.", ""]
     path = os.path.join(out, "robustness.md")
