@@ -37,30 +37,41 @@ struct Layout {
 Layout agent_layout(int n_inputs);  // n_inputs → 32 → 32 → 21
 Layout connector_layout();          // 11 → 32 → 32 → 1
 
-// doubles of the packed copy of a parameter vector
-int packed_count(const Layout& L);
-// params (param_count()) → packed (packed_count())
-void pack(const Layout& L, const double* params, double* packed);
+// The kernels below are templates on the scalar T, instantiated for double (the engine's precision, SPEC §10)
+// and float (a float path's building block: the same algorithms with twice the lanes per vector, a tanh of its
+// own precision, and parameters rounded to float by pack(); measured in `divcoll bench`, not used by the engine).
 
-// acts: activation buffer of activation_count()*cols doubles, laid out as blocks per layer, each block
+// values of T in the packed copy of a parameter vector
+template <class T = double>
+int packed_count(const Layout& L);
+// params (param_count(), always double) → packed (packed_count<T>())
+template <class T>
+void pack(const Layout& L, const double* params, T* packed);
+
+// acts: activation buffer of activation_count()*cols values, laid out as blocks per layer, each block
 // (size_l × cols) column-major; the caller fills the input block (l = 0), forward fills the rest.
-void forward_packed(const Layout& L, const double* packed, int cols, double* acts);
+template <class T>
+void forward_packed(const Layout& L, const T* packed, int cols, T* acts);
 void forward(const Layout& L, const double* params, int cols, double* acts);
 // n networks of the same layout, one column each, with their own weights (packed + g·packed_stride) and their
 // own activation buffers (acts + g·activation_count()); the same bits as n calls of forward_packed, but the
 // networks' dependency chains are interleaved (two agents' layers fill each other's latency)
-void forward_packed_nets(const Layout& L, const double* packed, size_t packed_stride, int n, double* acts);
+template <class T>
+void forward_packed_nets(const Layout& L, const T* packed, size_t packed_stride, int n, T* acts);
 
 // backward from the gradient of the loss w.r.t. the outputs (post-tanh), out_grad (out × cols).
 // adds the parameter gradient into param_grad (param_count()) and, when in_grad is not null, writes the
-// gradient w.r.t. the input block into in_grad (in × cols). scratch: scratch_count()*cols doubles.
+// gradient w.r.t. the input block into in_grad (in × cols). scratch: scratch_count()*cols values.
 // param_grad may be null: no parameter gradient is computed (frozen weights; that is a third of the work)
-void backward_packed(const Layout& L, const double* packed, int cols, const double* acts, const double* out_grad,
-                     double* param_grad, double* in_grad, double* scratch);
+template <class T>
+void backward_packed(const Layout& L, const T* packed, int cols, const T* acts, const T* out_grad, T* param_grad,
+                     T* in_grad, T* scratch);
 void backward(const Layout& L, const double* params, int cols, const double* acts, const double* out_grad,
               double* param_grad, double* in_grad, double* scratch);
 
-// tanh over n values: the same bits for a value wherever it lies in memory (absolute error < 3e-16)
-void tanh_inplace(double* p, int n);
+// tanh over n values: the same bits for a value wherever it lies in memory (absolute error < 3e-16 in double,
+// < 1.2e-7 in float)
+template <class T>
+void tanh_inplace(T* p, int n);
 
 }  // namespace divcoll::nn

@@ -1,8 +1,9 @@
 // the controllers' MLP: forward against a plain reference, backward against central differences,
-// the vectorised tanh against std::tanh
+// the vectorised tanh against std::tanh; the kernels' float instantiation against the double one
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "common/rng.hpp"
 #include "nn/mlp.hpp"
@@ -53,7 +54,84 @@ TEST(Mlp, TanhMatchesStdTanh) {
   EXPECT_TRUE(std::isnan(special[2]));
 }
 
+TEST(Mlp, FloatTanhMatchesStdTanh) {
+  std::vector<float> x;
+  for (double v = -30; v <= 30; v += 0.001) x.push_back(static_cast<float>(v));
+  x.push_back(1e-30f);
+  x.push_back(-1e-12f);
+  std::vector<float> y = x;
+  nn::tanh_inplace(y.data(), static_cast<int>(y.size()));
+  // float's own rounding of the result is up to 6e-8 near ±1; the algorithm adds less than that again
+  for (size_t i = 0; i < x.size(); ++i) ASSERT_NEAR(y[i], std::tanh(static_cast<double>(x[i])), 1.2e-7) << "x = " << x[i];
+  std::vector<float> special = {INFINITY, -INFINITY, NAN};
+  nn::tanh_inplace(special.data(), 3);
+  EXPECT_EQ(special[0], 1.0f);
+  EXPECT_EQ(special[1], -1.0f);
+  EXPECT_TRUE(std::isnan(special[2]));
+}
+
 class MlpLayouts : public ::testing::TestWithParam<int> {};
+
+// forward and backward of the packed kernels in T, on parameters packed from double and inputs rounded to T
+template <class T>
+struct PackedRun {
+  std::vector<T> acts, param_grad, in_grad;
+  PackedRun(const nn::Layout& L, const std::vector<double>& p, const std::vector<double>& in,
+            const std::vector<double>& out_grad, int cols) {
+    std::vector<T> packed(nn::packed_count<T>(L));
+    nn::pack(L, p.data(), packed.data());
+    acts.assign(static_cast<size_t>(L.activation_count()) * cols, T(0));
+    for (size_t q = 0; q < in.size(); ++q) acts[q] = static_cast<T>(in[q]);
+    nn::forward_packed(L, packed.data(), cols, acts.data());
+    std::vector<T> og(out_grad.begin(), out_grad.end()), scratch(static_cast<size_t>(L.scratch_count()) * cols);
+    param_grad.assign(L.param_count(), T(0));
+    in_grad.assign(static_cast<size_t>(L.in()) * cols, T(0));
+    nn::backward_packed(L, packed.data(), cols, acts.data(), og.data(), param_grad.data(), in_grad.data(), scratch.data());
+  }
+};
+
+// float follows double to float's precision: outputs within 2e-6, gradients within 2e-5 of the largest
+TEST_P(MlpLayouts, FloatFollowsDouble) {
+  const nn::Layout L = GetParam() == 0 ? nn::agent_layout(54) : nn::connector_layout();
+  const int cols = 5;
+  const std::vector<double> p = random_vec(L.param_count(), 11, 0.3);
+  const std::vector<double> in = random_vec(L.in() * cols, 12, 1.0);
+  const std::vector<double> og = random_vec(L.out() * cols, 13, 1.0);
+  const PackedRun<double> d(L, p, in, og, cols);
+  const PackedRun<float> f(L, p, in, og, cols);
+  for (size_t q = 0; q < d.acts.size(); ++q) ASSERT_NEAR(f.acts[q], d.acts[q], 2e-6) << "activation " << q;
+  auto largest = [](const std::vector<double>& v) {
+    double m = 0;
+    for (double x : v) m = std::max(m, std::abs(x));
+    return m;
+  };
+  const double gp = largest(d.param_grad), gx = largest(d.in_grad);
+  ASSERT_GT(gp, 0.01);
+  ASSERT_GT(gx, 0.01);
+  for (size_t q = 0; q < d.param_grad.size(); ++q) ASSERT_NEAR(f.param_grad[q], d.param_grad[q], 2e-5 * gp) << "parameter " << q;
+  for (size_t q = 0; q < d.in_grad.size(); ++q) ASSERT_NEAR(f.in_grad[q], d.in_grad[q], 2e-5 * gx) << "input " << q;
+}
+
+// a column's float outputs and input gradient are the same bits whether it is computed among 7 columns or alone
+TEST_P(MlpLayouts, FloatColumnGivesTheSameBitsAmongOthersAndAlone) {
+  const nn::Layout L = GetParam() == 0 ? nn::agent_layout(54) : nn::connector_layout();
+  const int cols = 7;
+  const std::vector<double> p = random_vec(L.param_count(), 21, 0.3);
+  const std::vector<double> in = random_vec(L.in() * cols, 22, 1.0);
+  const std::vector<double> og = random_vec(L.out() * cols, 23, 1.0);
+  const PackedRun<float> all(L, p, in, og, cols);
+  for (int c = 0; c < cols; ++c) {
+    const PackedRun<float> one(L, p, std::vector<double>(in.begin() + c * L.in(), in.begin() + (c + 1) * L.in()),
+                               std::vector<double>(og.begin() + c * L.out(), og.begin() + (c + 1) * L.out()), 1);
+    for (int l = 1; l <= L.n_layers(); ++l)
+      ASSERT_EQ(std::memcmp(&all.acts[static_cast<size_t>(L.activation_offset(l)) * cols + static_cast<size_t>(c) * L.sizes[l]],
+                            &one.acts[L.activation_offset(l)], sizeof(float) * L.sizes[l]),
+                0)
+          << "column " << c << ", layer " << l;
+    ASSERT_EQ(std::memcmp(&all.in_grad[static_cast<size_t>(c) * L.in()], one.in_grad.data(), sizeof(float) * L.in()), 0)
+        << "column " << c;
+  }
+}
 
 TEST_P(MlpLayouts, ForwardMatchesReferenceForEveryColumn) {
   const nn::Layout L = GetParam() == 0 ? nn::agent_layout(54) : nn::connector_layout();
