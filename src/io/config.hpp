@@ -24,6 +24,7 @@ struct RunConfig {
     double progress_every_s{};  // seconds between progress lines (0 = none)
     double stop_grace_s{};      // after SIGTERM/SIGINT/SIGUSR1: longest wait for the next checkpoint
     double memory_limit_gb{};   // per node, for every rank's simulator tape together (0 = 80% of MemAvailable)
+    std::string precision;      // double | float_networks (the controllers' networks in float; sim::RunOptions)
     bool operator==(const Run&) const = default;
   };
   struct Agents {

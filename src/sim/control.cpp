@@ -2,15 +2,19 @@
 //
 // agents: 54 inputs (10 sines, then per mass (x − c)κ_a and v κ_a), one network per agent, o ← α y + (1−α) o
 // connectors: 11 inputs per spring, one weight set for all 5·C connector springs (a single GEMM)
+// T: the networks' scalar (stages.hpp). The inputs are computed in double and stored as T; the outputs are read
+// as T and enter o in double. With T = double this is the spec's step, operation for operation.
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "sim/stages.hpp"
 
 namespace divcoll::sim {
 
+template <class T>
 void control_forward(const Model& m, int t, const double* x, const double* v, const uint8_t* tau, double* o,
-                     const ControlBuffers& buf) {
+                     const ControlBuffers<T>& buf) {
   const Scene& sc = *m.scene;
   const Constants& k = sc.constants;
   const int na = m.agent_layout.activation_count();
@@ -19,7 +23,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
 
   // agents
   for (int a = 0; a < m.A; ++a) {
-    double* act = buf.agent_acts + static_cast<size_t>(a) * na;
+    T* act = buf.agent_acts + static_cast<size_t>(a) * na;
     const int32_t* mi = &sc.agent_mass_index[a * kAgentMasses];
     // the sines are the same for every agent: computed for the first, copied to the others
     if (a == 0 && t < m.sine_steps)
@@ -35,7 +39,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     }
     cx /= kAgentMasses;
     cy /= kAgentMasses;
-    double* in = act + k.n_sines;
+    T* in = act + k.n_sines;
     for (int q = 0; q < kAgentMasses; ++q) {
       in[4 * q + 0] = (x[2 * mi[q]] - cx) * ka;
       in[4 * q + 1] = (x[2 * mi[q] + 1] - cy) * ka;
@@ -45,9 +49,10 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     (void)n_in;
   }
   // every agent's network in one call: two agents' layers at a time, each filling the other's latency
-  if (m.A > 0) nn::forward_packed_nets(m.agent_layout, m.agent_packed.data(), m.agent_packed_count, m.A, buf.agent_acts);
+  if (m.A > 0)
+    nn::forward_packed_nets(m.agent_layout, m.agent_packed_for<T>(), m.agent_packed_count_for<T>(), m.A, buf.agent_acts);
   for (int a = 0; a < m.A; ++a) {
-    const double* y = buf.agent_acts + static_cast<size_t>(a) * na + m.agent_layout.activation_offset(m.agent_layout.n_layers());
+    const T* y = buf.agent_acts + static_cast<size_t>(a) * na + m.agent_layout.activation_offset(m.agent_layout.n_layers());
     const int32_t* si = &sc.agent_spring_index[a * kAgentSprings];
     for (int r = 0; r < kAgentSprings; ++r) o[si[r]] = k.agent_alpha * y[r] + (1.0 - k.agent_alpha) * o[si[r]];
   }
@@ -57,7 +62,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
   const int cols = kConnectorSprings * m.C;
   const double kx = k.conn_kappa_x, kv = k.conn_kappa_v;
   const double eps2 = k.eps_len * k.eps_len;
-  double* in = buf.conn_acts;  // input block: 11 × cols, column-major
+  T* in = buf.conn_acts;  // input block: 11 × cols, column-major
   for (int c = 0; c < m.C; ++c) {
     double mx = 0, my = 0;
     const int a0 = m.conn_anchor_start[c], a1 = m.conn_anchor_start[c + 1];
@@ -70,7 +75,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     for (int r = 0; r < kConnectorSprings; ++r) {
       const int s = sc.connector_spring_index[c * kConnectorSprings + r];
       const int i = sc.spring_i[s], j = sc.spring_j[s];
-      double* col = in + static_cast<size_t>(c * kConnectorSprings + r) * kConnectorInputs;
+      T* col = in + static_cast<size_t>(c * kConnectorSprings + r) * kConnectorInputs;
       const double dx = x[2 * i] - x[2 * j], dy = x[2 * i + 1] - x[2 * j + 1];
       col[0] = (x[2 * i] - mx) * kx;
       col[1] = (x[2 * i + 1] - my) * kx;
@@ -85,17 +90,25 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
       col[10] = std::sqrt(dx * dx + dy * dy + eps2) / sc.rest_length[s];
     }
   }
-  nn::forward_packed(m.conn_layout, m.conn_packed.data(), cols, buf.conn_acts);
-  const double* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * cols;
+  nn::forward_packed(m.conn_layout, m.conn_packed_for<T>(), cols, buf.conn_acts);
+  const T* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
     o[s] = k.conn_alpha * y[c] + (1.0 - k.conn_alpha) * o[s];
   }
 }
 
-void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v, const ControlBuffers& buf,
-                     double* ob, double* xb, double* vb, double* Lb, double* g_agent, double* g_conn,
-                     double* scratch) {
+template <class T>
+size_t control_scratch_count(const Model& m) {
+  const size_t cols = kConnectorSprings * static_cast<size_t>(m.C);
+  const size_t agent = m.agent_layout.in() + m.agent_layout.scratch_count();
+  const size_t conn = cols * (1 + kConnectorInputs + m.conn_layout.scratch_count());
+  return std::max(agent, conn);
+}
+
+template <class T>
+void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v, const ControlBuffers<T>& buf,
+                     double* ob, double* xb, double* vb, double* Lb, T* g_agent, T* g_conn, T* scratch) {
   const Scene& sc = *m.scene;
   const Constants& k = sc.constants;
   const int na = m.agent_layout.activation_count();
@@ -104,21 +117,21 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
 
   // agents
   for (int a = 0; a < m.A; ++a) {
-    const double* act = buf.agent_acts + static_cast<size_t>(a) * na;
+    const T* act = buf.agent_acts + static_cast<size_t>(a) * na;
     const int32_t* mi = &sc.agent_mass_index[a * kAgentMasses];
     const int32_t* si = &sc.agent_spring_index[a * kAgentSprings];
     // o' = α y + (1 − α) o
-    double yb[kAgentSprings];
+    T yb[kAgentSprings];
     for (int r = 0; r < kAgentSprings; ++r) {
       yb[r] = alpha * ob[si[r]];
       ob[si[r]] *= (1.0 - alpha);
     }
-    double* in_grad = scratch;
-    double* nn_scratch = scratch + m.agent_layout.in();
-    nn::backward_packed(m.agent_layout, &m.agent_packed[static_cast<size_t>(a) * m.agent_packed_count], 1, act, yb,
-                        g_agent ? g_agent + static_cast<size_t>(a) * m.agent_params : nullptr, in_grad, nn_scratch);
+    T* in_grad = scratch;
+    T* nn_scratch = scratch + m.agent_layout.in();
+    nn::backward_packed(m.agent_layout, m.agent_packed_for<T>() + static_cast<size_t>(a) * m.agent_packed_count_for<T>(), 1,
+                        act, yb, g_agent ? g_agent + static_cast<size_t>(a) * m.agent_params : nullptr, in_grad, nn_scratch);
     // inputs (x − c) κ and v κ, c = mean of the agent's masses
-    const double* g = in_grad + k.n_sines;
+    const T* g = in_grad + k.n_sines;
     double cbx = 0, cby = 0;
     for (int q = 0; q < kAgentMasses; ++q) {
       xb[2 * mi[q]] += ka * g[4 * q + 0];
@@ -140,21 +153,21 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
   const double kx = k.conn_kappa_x, kv = k.conn_kappa_v;
   const double eps2 = k.eps_len * k.eps_len;
   const double ac = k.conn_alpha;
-  double* yb = scratch;                                  // 1 × cols
-  double* in_grad = scratch + cols;                      // 11 × cols
-  double* nn_scratch = in_grad + static_cast<size_t>(kConnectorInputs) * cols;
+  T* yb = scratch;                                  // 1 × cols
+  T* in_grad = scratch + cols;                      // 11 × cols
+  T* nn_scratch = in_grad + static_cast<size_t>(kConnectorInputs) * cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
     yb[c] = ac * ob[s];
     ob[s] *= (1.0 - ac);
   }
-  nn::backward_packed(m.conn_layout, m.conn_packed.data(), cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
+  nn::backward_packed(m.conn_layout, m.conn_packed_for<T>(), cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
   for (int c = 0; c < m.C; ++c) {
     double mbx = 0, mby = 0;
     for (int r = 0; r < kConnectorSprings; ++r) {
       const int s = sc.connector_spring_index[c * kConnectorSprings + r];
       const int i = sc.spring_i[s], j = sc.spring_j[s];
-      const double* g = in_grad + static_cast<size_t>(c * kConnectorSprings + r) * kConnectorInputs;
+      const T* g = in_grad + static_cast<size_t>(c * kConnectorSprings + r) * kConnectorInputs;
       xb[2 * i] += kx * g[0];
       xb[2 * i + 1] += kx * g[1];
       xb[2 * j] += kx * g[2];
@@ -184,5 +197,15 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
   }
   (void)v;
 }
+
+#define DIVCOLL_CONTROL_INSTANTIATE(T)                                                                            \
+  template void control_forward<T>(const Model&, int, const double*, const double*, const uint8_t*, double*,      \
+                                   const ControlBuffers<T>&);                                                     \
+  template void control_adjoint<T>(const Model&, int, const double*, const double*, const ControlBuffers<T>&,     \
+                                   double*, double*, double*, double*, T*, T*, T*);                               \
+  template size_t control_scratch_count<T>(const Model&);
+DIVCOLL_CONTROL_INSTANTIATE(double)
+DIVCOLL_CONTROL_INSTANTIATE(float)
+#undef DIVCOLL_CONTROL_INSTANTIATE
 
 }  // namespace divcoll::sim

@@ -1,6 +1,7 @@
 #include "sim/engine.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -9,6 +10,16 @@
 #include "sim/stages.hpp"
 
 namespace divcoll::sim {
+namespace {
+// float_networks: steps whose parameter gradients are summed in float before they join the double sums
+constexpr int kFloatGradSteps = 16;
+}  // namespace
+
+namespace {
+std::atomic<bool> g_default_float_networks{false};
+}  // namespace
+void set_default_float_networks(bool on) { g_default_float_networks = on; }
+bool default_float_networks() { return g_default_float_networks; }
 
 const char* status_name(Status s) {
   switch (s) {
@@ -31,6 +42,8 @@ struct Simulator::Impl {
   std::vector<double> os;              // (T × S) o'_t after control (grad) or (S) rolling
   std::vector<double> agent_acts;      // (T × A × agent acts) (grad) or one step
   std::vector<double> conn_acts;       // (T × conn acts × 5C) (grad) or one step
+  std::vector<float> agent_acts_f, conn_acts_f, scratch_f;  // the same with RunOptions::float_networks
+  std::vector<float> g_agent_f, g_conn_f;  // float_networks: parameter gradients of the last few steps, in float
 
   // scratch
   std::vector<double> F, Fb, vpb, xb, vb, xb2, vb2, ob, Lb, scratch;
@@ -55,15 +68,20 @@ struct Simulator::Impl {
       fit(vps, N2);
     }
     fit(os, (steps_kept + 1) * m.S);
-    fit(agent_acts, steps_kept * m.A * m.agent_layout.activation_count());
-    fit(conn_acts, steps_kept * m.conn_layout.activation_count() * kConnectorSprings * m.C);
+    const size_t n_agent_acts = steps_kept * m.A * m.agent_layout.activation_count();
+    const size_t n_conn_acts = steps_kept * m.conn_layout.activation_count() * kConnectorSprings * m.C;
+    if (opt.float_networks) {
+      fit(agent_acts_f, n_agent_acts);
+      fit(conn_acts_f, n_conn_acts);
+      fit(scratch_f, control_scratch_count<float>(m));
+    } else {
+      fit(agent_acts, n_agent_acts);
+      fit(conn_acts, n_conn_acts);
+    }
     for (auto* b : {&F, &Fb, &vpb, &xb, &vb, &xb2, &vb2}) fit(*b, N2);
     fit(ob, m.S);
     fit(Lb, m.S);
-    const size_t cols = kConnectorSprings * static_cast<size_t>(m.C);
-    const size_t agent_scratch = m.agent_layout.in() + m.agent_layout.scratch_count();
-    const size_t conn_scratch = cols * (1 + kConnectorInputs + m.conn_layout.scratch_count());
-    fit(scratch, std::max(agent_scratch, conn_scratch));
+    fit(scratch, control_scratch_count<double>(m));
   }
 
   RunResult run(const Scene& sc, const RunOptions& opt);
@@ -78,6 +96,8 @@ size_t Simulator::workspace_bytes() const {
   for (const auto* v : {&I.xs, &I.vs, &I.vps, &I.os, &I.agent_acts, &I.conn_acts, &I.F, &I.Fb, &I.vpb, &I.xb,
                         &I.vb, &I.xb2, &I.vb2, &I.ob, &I.Lb, &I.scratch})
     b += v->capacity() * sizeof(double);
+  for (const auto* v : {&I.agent_acts_f, &I.conn_acts_f, &I.scratch_f, &I.g_agent_f, &I.g_conn_f})
+    b += v->capacity() * sizeof(float);
   b += I.taus.capacity() + I.recs.capacity() * sizeof(ContactRecord);
   return b;
 }
@@ -138,7 +158,9 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   Model& m = model;
   m.compile(sc, n_sub);
   if (m.A > 0) m.prepare_sines(opt.steps);
+  if (opt.float_networks) m.pack_float();
   size_for(m, opt);
+  const bool fl = opt.float_networks;
 
   const int T = opt.steps, n = m.substeps, N = m.N, S = m.S;
   const size_t N2 = 2 * static_cast<size_t>(N);
@@ -171,13 +193,16 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
     // control: o'_t from state t (o kept per step on the tape)
     double* o = &os[(opt.grad ? t + 1 : 0) * static_cast<size_t>(S)];
     if (opt.grad) std::copy(os.begin() + t * S, os.begin() + (t + 1) * S, o);
-    ControlBuffers cb{&agent_acts[(opt.grad ? t : 0) * static_cast<size_t>(m.A) * na],
-                      &conn_acts[(opt.grad ? t : 0) * static_cast<size_t>(nc)]};
-    control_forward(m, t, sx(k), sv(k), st(k), o, cb);
-    if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
-      const double* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * cols;
-      res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * cols);
-    }
+    const size_t ta = (opt.grad ? t : 0) * static_cast<size_t>(m.A) * na, tc = (opt.grad ? t : 0) * static_cast<size_t>(nc);
+    auto control = [&](auto cb) {
+      control_forward(m, t, sx(k), sv(k), st(k), o, cb);
+      if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
+        const auto* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * cols;
+        res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * cols);
+      }
+    };
+    if (fl) control(ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc});
+    else control(ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc});
     // physics substeps
     for (int s = 0; s < n; ++s, ++k) {
       double* vp = opt.grad ? &vps[static_cast<size_t>(k) * N2] : vps.data();
@@ -251,6 +276,20 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   }
   std::fill(vbar, vbar + N2, 0.0);
   std::fill(ob.begin(), ob.begin() + S, 0.0);
+  // float_networks: the parameter gradients are summed in float over at most kFloatGradSteps steps, then added
+  // into the double sums (float's rounding of a sum of 16 terms, not of 1000; zeroing and adding every step
+  // cost as much as an agent's network)
+  if (fl) {
+    g_agent_f.assign(opt.agent_param_grad ? static_cast<size_t>(m.A) * m.agent_params : 0, 0.0f);
+    g_conn_f.assign(m.C > 0 ? m.conn_params : 0, 0.0f);
+  }
+  auto flush_float_grads = [&] {
+    auto add = [](std::vector<float>& f, double* into) {
+      for (size_t q = 0; q < f.size(); ++q) into[q] += f[q], f[q] = 0.0f;
+    };
+    if (!g_agent_f.empty()) add(g_agent_f, res.grad_agent_params.data());
+    if (!g_conn_f.empty()) add(g_conn_f, gc);
+  };
   // the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from
   // several arrays at once, which the hardware prefetcher follows poorly: step t − 1's blocks are asked for
   // while step t is being processed
@@ -261,8 +300,13 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   for (int t = T - 1; t >= 0; --t) {
     if (t > 0) {
       const size_t k0 = static_cast<size_t>(t - 1) * n;
-      prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
-      prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
+      if (fl) {
+        prefetch(&agent_acts_f[static_cast<size_t>(t - 1) * m.A * na], sizeof(float) * m.A * na);
+        prefetch(&conn_acts_f[static_cast<size_t>(t - 1) * nc], sizeof(float) * nc);
+      } else {
+        prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
+        prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
+      }
       prefetch(&recs[k0 * N], sizeof(ContactRecord) * n * N);
       prefetch(&xs[k0 * N2], sizeof(double) * n * N2);
       prefetch(&vs[k0 * N2], sizeof(double) * n * N2);
@@ -282,9 +326,17 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       std::swap(xbar, xbar_prev);
       std::swap(vbar, vbar_prev);
     }
-    ControlBuffers cb{&agent_acts[static_cast<size_t>(t) * m.A * na], &conn_acts[static_cast<size_t>(t) * nc]};
-    control_adjoint(m, t, sx(k), sv(k), cb, ob.data(), xbar, vbar, Lbar,
-                    opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc, scratch.data());
+    const size_t ta = static_cast<size_t>(t) * m.A * na, tc = static_cast<size_t>(t) * nc;
+    if (fl) {
+      control_adjoint(m, t, sx(k), sv(k), ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc},
+                      ob.data(), xbar, vbar, Lbar, opt.agent_param_grad ? g_agent_f.data() : nullptr,
+                      m.C > 0 ? g_conn_f.data() : nullptr, scratch_f.data());
+      if (t % kFloatGradSteps == 0) flush_float_grads();
+    } else {
+      control_adjoint(m, t, sx(k), sv(k), ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc},
+                      ob.data(), xbar, vbar, Lbar, opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc,
+                      scratch.data());
+    }
     // truncated backpropagation: state t starts a window and ends the previous one, whose seed restarts here
     if (opt.grad_window > 0 && t > 0 && t % opt.grad_window == 0) {
       for (int i = 0; i < N; ++i) xbar[2 * i] = 1.0 / N, xbar[2 * i + 1] = 0;
@@ -292,6 +344,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       std::fill(ob.begin(), ob.begin() + S, 0.0);
     }
   }
+  if (fl) flush_float_grads();
   // x0 is both the initial state and travel's baseline
   res.grad_x0.assign(xbar, xbar + N2);
   for (int i = 0; i < N; ++i) res.grad_x0[2 * i] -= 1.0 / N;

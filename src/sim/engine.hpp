@@ -30,6 +30,11 @@ namespace divcoll::sim {
 enum class Status : uint8_t { ok = 0, nan = 1, unstable = 2 };
 const char* status_name(Status s);
 
+// the process's default for RunOptions::float_networks (false until set): `divcoll run` sets it on every rank
+// from run.precision before any work, so that every episode of a run is computed in the run's precision
+void set_default_float_networks(bool on);
+bool default_float_networks();
+
 // what to compute for an episode
 struct RunOptions {
   int steps = 1000;              // control steps T
@@ -43,6 +48,9 @@ struct RunOptions {
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
   double speed_limit = 100.0;    // u/s; a mass faster than this marks the episode unstable
+  bool float_networks = default_float_networks();  // the controllers' networks in float (inputs, weights, activations and their
+                                 // gradients; nn/mlp.hpp's float kernels), the physics in double: faster, and not
+                                 // the spec's double precision (SPEC §10); false = the spec's step
 };
 
 // what an episode produced

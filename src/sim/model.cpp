@@ -69,6 +69,17 @@ void Model::compile(const Scene& s, int n_substeps) {
   }
 }
 
+void Model::pack_float() {
+  const Scene& s = *scene;
+  agent_packed_count_f = nn::packed_count<float>(agent_layout);
+  agent_packed_f.resize(static_cast<size_t>(A) * agent_packed_count_f);
+  for (int a = 0; a < A; ++a)
+    nn::pack(agent_layout, &s.agent_params[static_cast<size_t>(a) * agent_params],
+             &agent_packed_f[static_cast<size_t>(a) * agent_packed_count_f]);
+  conn_packed_f.resize(C > 0 ? nn::packed_count<float>(conn_layout) : 0);
+  if (C > 0) nn::pack(conn_layout, s.connector_params.data(), conn_packed_f.data());
+}
+
 void Model::prepare_sines(int steps) {
   if (steps <= sine_steps) return;
   const Constants& k = scene->constants;

@@ -41,6 +41,24 @@ struct Model {
   // nn::packed_count(conn_layout) for the connectors' shared weights
   int agent_packed_count = 0;
   std::vector<double> agent_packed, conn_packed;
+  // the same weights rounded to float, packed for the float kernels (RunOptions::float_networks only; pack_float())
+  int agent_packed_count_f = 0;
+  std::vector<float> agent_packed_f, conn_packed_f;
+  // the packed weights for the kernels' scalar T
+  template <class T>
+  const T* agent_packed_for() const {
+    if constexpr (sizeof(T) == sizeof(double)) return agent_packed.data();
+    else return agent_packed_f.data();
+  }
+  template <class T>
+  const T* conn_packed_for() const {
+    if constexpr (sizeof(T) == sizeof(double)) return conn_packed.data();
+    else return conn_packed_f.data();
+  }
+  template <class T>
+  int agent_packed_count_for() const {
+    return sizeof(T) == sizeof(double) ? agent_packed_count : agent_packed_count_f;
+  }
   // distinct anchor masses per connector: conn_anchor[conn_anchor_start[c] .. conn_anchor_start[c+1])
   std::vector<int32_t> conn_anchor_start, conn_anchor;
 
@@ -53,6 +71,8 @@ struct Model {
   void compile(const Scene& s, int substeps);
   // makes the sine table cover steps [0, steps) for the compiled scene's constants
   void prepare_sines(int steps);
+  // packs the compiled scene's controller weights for the float kernels
+  void pack_float();
   double sine_omega_ = 0, sine_dt_ = 0;  // the constants the table was made for
   int sine_n_ = 0;
 };

@@ -19,18 +19,27 @@ namespace divcoll::sim {
 // ---- control -----------------------------------------------------------------------------------
 // activation buffers: agents (A × agent act count, one column each), connectors (conn act count × 5C,
 // one column per connector spring). o is updated in place: o ← α tanh(net) + (1 − α) o.
+// T is the networks' scalar: double (the spec's), or float (RunOptions::float_networks: the networks' inputs,
+// weights, activations and gradients in float; everything outside the networks stays double)
+template <class T>
 struct ControlBuffers {
-  double* agent_acts;   // A × agent_layout.activation_count()
-  double* conn_acts;    // conn_layout.activation_count() × 5C
+  T* agent_acts;   // A × agent_layout.activation_count()
+  T* conn_acts;    // conn_layout.activation_count() × 5C
 };
 
+template <class T>
 void control_forward(const Model& m, int t, const double* x, const double* v, const uint8_t* tau, double* o,
-                     const ControlBuffers& buf);
-// ob: in ō'_t, out ō_t; adds into xb, vb, Lb, g_agent (A × P_a; null: not wanted), g_conn (P_c); scratch as nn::backward
-// needs (max of agent and 5C connector scratch) plus 11 × 5C for the connector input gradient
-void control_adjoint(const Model& m, int t, const double* x, const double* v, const ControlBuffers& buf,
-                     double* ob, double* xb, double* vb, double* Lb, double* g_agent, double* g_conn,
-                     double* scratch);
+                     const ControlBuffers<T>& buf);
+// ob: in ō'_t, out ō_t; adds into xb, vb, Lb, g_agent (A × P_a; null: not wanted), g_conn (P_c); the parameter
+// gradients are in T (with float the engine adds them into its double sums every few steps); scratch: as
+// control_scratch_count (nn::backward's scratch, the larger of the agents' and the 5C connector columns', plus
+// 11 × 5C for the connector input gradient)
+template <class T>
+void control_adjoint(const Model& m, int t, const double* x, const double* v, const ControlBuffers<T>& buf,
+                     double* ob, double* xb, double* vb, double* Lb, T* g_agent, T* g_conn, T* scratch);
+// values of T the adjoint's scratch needs
+template <class T>
+size_t control_scratch_count(const Model& m);
 
 // ---- springs -----------------------------------------------------------------------------------
 void springs_forward(const Model& m, const double* x, const double* v, const double* o, double* F);

@@ -126,6 +126,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "run.progress_every_s",
                                              "run.stop_grace_s",
                                              "run.memory_limit_gb",
+                                             "run.precision",
                                              "agents.population",
                                              "agents.generations",
                                              "agents.epochs",

@@ -226,8 +226,8 @@ TEST(StageAdjoint, ControlMatchesCentralDifferences) {
   // without the agents' parameter gradient every other block is the same, bit for bit
   L();
   Vec ob2 = wo, xb2(s.x.size(), 0.0), vb2(s.v.size(), 0.0), Lb2(s.o.size(), 0.0), gc2(gc.size(), 0.0);
-  sim::control_adjoint(m, t, s.x.data(), s.v.data(), sim::ControlBuffers{agent_acts.data(), conn_acts.data()},
-                       ob2.data(), xb2.data(), vb2.data(), Lb2.data(), nullptr, gc2.data(), scratch.data());
+  sim::control_adjoint<double>(m, t, s.x.data(), s.v.data(), sim::ControlBuffers{agent_acts.data(), conn_acts.data()},
+                               ob2.data(), xb2.data(), vb2.data(), Lb2.data(), nullptr, gc2.data(), scratch.data());
   EXPECT_EQ(xb2, xb);
   EXPECT_EQ(vb2, vb);
   EXPECT_EQ(ob2, ob);
