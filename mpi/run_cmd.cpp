@@ -271,6 +271,8 @@ int run_session(const RunArgs& args) {
       if (fs::exists(path) && !args.resume && !args.force)
         throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
     });
+    // every episode of this run in the run's precision (a study runs several configs in one process)
+    sim::set_default_float_networks(cfg.run.precision == "float_networks");
     const fs::path parent = fs::absolute(path).parent_path();
     agree_rank0(MPI_COMM_WORLD, [&] {
       std::error_code mkdir_error;
