@@ -57,7 +57,7 @@ struct MpiSession {
 
 }  // namespace
 
-// the sections whose keys decide what a stage computes (beside run.seed, which every stage uses)
+// the sections whose keys decide what a stage computes (beside run.seed and run.precision, which every stage uses)
 std::vector<std::string> sections_before(const std::string& stage) {
   std::vector<std::string> out;
   for (const std::string& s : io::stage_names()) {
@@ -67,14 +67,16 @@ std::vector<std::string> sections_before(const std::string& stage) {
   return out;
 }
 
-// --from: the keys of the stages before `from` (and run.seed) must be the base's; returns the differences
+// --from: the keys of the stages before `from` (and run.seed, run.precision) must be the base's; returns the
+// differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
 std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
   const auto a = io::flat(base), b = io::flat(now);
   const auto secs = sections_before(from);
   std::string diff;
   for (size_t i = 0; i < a.size(); ++i) {
     const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
-    const bool bound = a[i].first == "run.seed" || std::find(secs.begin(), secs.end(), sec) != secs.end();
+    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" ||
+                       std::find(secs.begin(), secs.end(), sec) != secs.end();
     if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
   }
   return diff;

@@ -216,6 +216,8 @@ int bench(const BenchArgs& a) {
   // time constant (α(Δt) = 1 − (1 − α)^(Δt/0.004)); error = largest position deviation at t = 1 s
   // against a reference at Δt = 0.000125 s (the smallest Δt / 8)
   std::printf("\n## Speed against error: one pair, 1 s of simulated time, flat ground\n\n");
+  std::printf("The last row runs Δt = 0.004 s with the networks in float (run.precision = float_networks); its error is\n"
+              "against the same reference, beside the double row above it.\n\n");
   std::printf("| Δt (s) | substeps | steps | pair-steps per CPU-s (fwd) | simulated s per CPU-s | max position error (u) |\n");
   std::printf("|---|---|---|---|---|---|\n");
   auto constants_for = [](double dt) {
@@ -225,24 +227,26 @@ int bench(const BenchArgs& a) {
     c.conn_alpha = 1.0 - std::pow(1.0 - 0.1, dt / 0.004);
     return c;
   };
-  auto final_x = [&](double dt) {
+  auto final_x = [&](double dt, bool float_networks = false) {
     const sim::Scene s = make_scene(f, "pair", 0, constants_for(dt));
     sim::RunOptions opt;
     opt.steps = static_cast<int>(std::lround(1.0 / dt));
     opt.record = true;
+    opt.float_networks = float_networks;
     const sim::RunResult r = sim::simulate(s, opt);
     return std::vector<double>(r.x.end() - 2 * s.n_masses(), r.x.end());
   };
   const std::vector<double> ref = final_x(0.000125);
-  for (double dt : {0.001, 0.002, 0.004, 0.008}) {
+  for (const auto& [dt, fl] : {std::pair{0.001, false}, {0.002, false}, {0.004, false}, {0.008, false}, {0.004, true}}) {
     const sim::Scene s = make_scene(f, "pair", 0, constants_for(dt));
-    const std::vector<double> x = final_x(dt);
+    const std::vector<double> x = final_x(dt, fl);
     double err = 0;
     for (size_t q = 0; q < x.size(); ++q) err = std::max(err, std::abs(x[q] - ref[q]));
     sim::Simulator sim;
     const int steps = static_cast<int>(std::lround(1.0 / dt));
-    const double sps = time_batch(sim, {s}, steps, false, a.seconds);
-    std::printf("| %.3f | %d | %d | %.0f | %.1f | %.2e |\n", dt, sim::substeps_needed(s), steps, sps, sps * dt, err);
+    const double sps = time_batch(sim, {s}, steps, false, a.seconds, true, fl);
+    std::printf("| %.3f%s | %d | %d | %.0f | %.1f | %.2e |\n", dt, fl ? ", float networks" : "", sim::substeps_needed(s),
+                steps, sps, sps * dt, err);
     std::fflush(stdout);
   }
   return 0;

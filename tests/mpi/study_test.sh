@@ -180,4 +180,9 @@ grep -q "training_length/seed3.h5: computes analysis, reuses baseline/seed3.h5" 
 grep -q "alone_runway_mean/seed1.h5: computes deploy,analysis, reuses baseline/seed1.h5" "$W/plan.log" || fail "a deploy-key variant does not reuse the connectors"
 grep -q "weak_k1000/seed5.h5: computes connectors,deploy,analysis, reuses baseline/seed5.h5" "$W/plan.log" || fail "a connectors-key variant does not reuse the agents"
 grep -q "weak_agents/seed2.h5: computes agents,connectors,deploy,analysis$" "$W/plan.log" || fail "an agents-key variant reuses something"
+# run.precision changes every stage's numbers: its variant reuses nothing (it once reused all but the analysis)
+"$D" study "$SRC/configs/studies/claims_reduced_precision.toml" --out "$W/precision" --plan > "$W/plan_p.log" \
+  || { cat "$W/plan_p.log"; fail "claims_reduced_precision.toml is refused"; }
+grep -q "float_networks/seed3.h5: computes agents,connectors,deploy,analysis$" "$W/plan_p.log" \
+  || { cat "$W/plan_p.log"; fail "a run.precision variant reuses a stage computed in double"; }
 echo "study: passed"
