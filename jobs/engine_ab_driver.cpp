@@ -6,6 +6,8 @@
 //       -ltomlplusplus -lpagmo
 //   dea5a14 (one libdivcoll_core.a, no RunOptions::agent_param_grad): the same without -DHAS_AGRAD, linking
 //       TREE/build/libdivcoll_core.a -ltomlplusplus -lboost_serialization
+//   with -DHAS_FLOAT (0981201 and later) DIVCOLL_AB_FLOAT=1 in the environment runs the networks in float: a
+//   two-line script `DIVCOLL_AB_FLOAT=1 exec ./ab "$@"` is then the float side of jobs/engine_ab.py's pair.
 //   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20) prints scene-steps per CPU
 //   second, CPU seconds and a checksum (equal checksums: the same bits). jobs/engine_ab.py runs two in turn.
 #include <cstdio>
@@ -40,6 +42,9 @@ int main(int argc, char** argv) {
   opt.agent_param_grad = agrad;
 #else
   (void)agrad;
+#endif
+#ifdef HAS_FLOAT
+  opt.float_networks = std::getenv("DIVCOLL_AB_FLOAT") != nullptr;  // the networks in float (0981201 and later)
 #endif
   double s = 0;
   sim.run_batch({scenes.front()}, opt);

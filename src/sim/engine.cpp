@@ -13,9 +13,7 @@ namespace divcoll::sim {
 namespace {
 // float_networks: steps whose parameter gradients are summed in float before they join the double sums
 constexpr int kFloatGradSteps = 16;
-}  // namespace
-
-namespace {
+// RunOptions::float_networks's default (set_default_float_networks)
 std::atomic<bool> g_default_float_networks{false};
 }  // namespace
 void set_default_float_networks(bool on) { g_default_float_networks = on; }
