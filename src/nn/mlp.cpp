@@ -110,6 +110,11 @@ inline auto lane_mask(int n) {
   else return static_cast<__mmask16>((1u << n) - 1);
 }
 template <class T>
+inline Vec<T> load_masked(const T* p, int n) {  // lanes past n read as 0 (and are not read)
+  if constexpr (sizeof(T) == 8) return reinterpret_cast<Vec<T>>(_mm512_maskz_loadu_pd(lane_mask<T>(n), p));
+  else return reinterpret_cast<Vec<T>>(_mm512_maskz_loadu_ps(lane_mask<T>(n), p));
+}
+template <class T>
 inline void store_masked(T* p, int n, Vec<T> v) {
   if constexpr (sizeof(T) == 8) _mm512_mask_storeu_pd(p, lane_mask<T>(n), reinterpret_cast<__m512d>(v));
   else _mm512_mask_storeu_ps(p, lane_mask<T>(n), reinterpret_cast<__m512>(v));
@@ -493,25 +498,13 @@ void backward_packed(const Layout& L, const T* packed, int cols, const T* acts, 
         const int nt = in - in4;
         T bias = gb[o];
 #if defined(__AVX512F__)
-        if constexpr (sizeof(T) == 8) {
-          const __mmask8 mk = lane_mask<T>(nt);
-          __m512d tail = _mm512_maskz_loadu_pd(mk, row + in4);
-          for (int c = 0; c < cols; ++c) {
-            const T go = g_cur[static_cast<size_t>(c) * out + o];
-            tail = _mm512_fmadd_pd(_mm512_maskz_loadu_pd(mk, X + static_cast<size_t>(c) * in + in4), _mm512_set1_pd(go), tail);
-            bias += go;
-          }
-          _mm512_mask_storeu_pd(row + in4, mk, tail);
-        } else {
-          const __mmask16 mk = lane_mask<T>(nt);
-          __m512 tail = _mm512_maskz_loadu_ps(mk, row + in4);
-          for (int c = 0; c < cols; ++c) {
-            const T go = g_cur[static_cast<size_t>(c) * out + o];
-            tail = _mm512_fmadd_ps(_mm512_maskz_loadu_ps(mk, X + static_cast<size_t>(c) * in + in4), _mm512_set1_ps(go), tail);
-            bias += go;
-          }
-          _mm512_mask_storeu_ps(row + in4, mk, tail);
+        Vec<T> tail = load_masked<T>(row + in4, nt);
+        for (int c = 0; c < cols; ++c) {
+          const T go = g_cur[static_cast<size_t>(c) * out + o];
+          tail = fmadd<T>(load_masked<T>(X + static_cast<size_t>(c) * in + in4, nt), go, tail);
+          bias += go;
         }
+        store_masked<T>(row + in4, nt, tail);
 #else
         for (int c = 0; c < cols; ++c) {
           const T go = g_cur[static_cast<size_t>(c) * out + o];

@@ -98,7 +98,6 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
   }
 }
 
-template <class T>
 size_t control_scratch_count(const Model& m) {
   const size_t cols = kConnectorSprings * static_cast<size_t>(m.C);
   const size_t agent = m.agent_layout.in() + m.agent_layout.scratch_count();
@@ -202,8 +201,7 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
   template void control_forward<T>(const Model&, int, const double*, const double*, const uint8_t*, double*,      \
                                    const ControlBuffers<T>&);                                                     \
   template void control_adjoint<T>(const Model&, int, const double*, const double*, const ControlBuffers<T>&,     \
-                                   double*, double*, double*, double*, T*, T*, T*);                               \
-  template size_t control_scratch_count<T>(const Model&);
+                                   double*, double*, double*, double*, T*, T*, T*);
 DIVCOLL_CONTROL_INSTANTIATE(double)
 DIVCOLL_CONTROL_INSTANTIATE(float)
 #undef DIVCOLL_CONTROL_INSTANTIATE

@@ -71,7 +71,7 @@ struct Simulator::Impl {
     if (opt.float_networks) {
       fit(agent_acts_f, n_agent_acts);
       fit(conn_acts_f, n_conn_acts);
-      fit(scratch_f, control_scratch_count<float>(m));
+      fit(scratch_f, control_scratch_count(m));
     } else {
       fit(agent_acts, n_agent_acts);
       fit(conn_acts, n_conn_acts);
@@ -79,7 +79,7 @@ struct Simulator::Impl {
     for (auto* b : {&F, &Fb, &vpb, &xb, &vb, &xb2, &vb2}) fit(*b, N2);
     fit(ob, m.S);
     fit(Lb, m.S);
-    fit(scratch, control_scratch_count<double>(m));
+    fit(scratch, control_scratch_count(m));
   }
 
   RunResult run(const Scene& sc, const RunOptions& opt);

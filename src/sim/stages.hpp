@@ -37,8 +37,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
 template <class T>
 void control_adjoint(const Model& m, int t, const double* x, const double* v, const ControlBuffers<T>& buf,
                      double* ob, double* xb, double* vb, double* Lb, T* g_agent, T* g_conn, T* scratch);
-// values of T the adjoint's scratch needs
-template <class T>
+// values (of the networks' scalar, double or float) the adjoint's scratch needs
 size_t control_scratch_count(const Model& m);
 
 // ---- springs -----------------------------------------------------------------------------------
