@@ -3,14 +3,17 @@
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 #include "collective/builders.hpp"
+#include "morph/body.hpp"
 
 namespace divcoll::testing {
 // the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
@@ -48,5 +51,40 @@ inline collective::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
   collective::Agent a = collective::random_agent(rng);
   a.anchors = collective::compute_anchors(a, {}, 300);
   return a;
+}
+
+// the engine's gradient tests' pair (tests/sim/gradient_test.cpp, float_networks_test.cpp): two random agents with
+// anchors and connector weights with nonzero biases (so that every term matters), from stream (11, 1)
+struct GradientPair {
+  collective::Agent p, a;
+  std::vector<double> conn;
+};
+inline const GradientPair& gradient_pair() {
+  static const GradientPair f = [] {
+    GradientPair f;
+    Rng rng = make_rng(11, 1, 0);
+    f.p = collective::random_agent(rng);
+    f.a = collective::random_agent(rng);
+    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
+    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
+    f.conn = morph::init_connector_params(rng);
+    for (double& w : f.conn) w += 0.05 * normal(rng);
+    return f;
+  }();
+  return f;
+}
+inline double dot(const std::vector<double>& a, const std::vector<double>& b) {
+  double r = 0;
+  for (size_t i = 0; i < a.size(); ++i) r += a[i] * b[i];
+  return r;
+}
+// a unit vector of n normal draws from stream (seed, stream, n): a direction for directional derivatives
+inline std::vector<double> unit_direction(size_t n, uint64_t seed, uint64_t stream) {
+  Rng rng = make_rng(seed, stream, n);
+  std::vector<double> d(n);
+  for (double& x : d) x = normal(rng);
+  const double norm = std::sqrt(dot(d, d));
+  for (double& x : d) x /= norm;
+  return d;
 }
 }  // namespace divcoll::testing

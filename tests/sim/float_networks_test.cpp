@@ -9,36 +9,21 @@
 
 #include "collective/builders.hpp"
 #include "io/environments.hpp"
-#include "morph/body.hpp"
 #include "sim/engine.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
 
 constexpr int kSteps = 150;
 
-struct Fixture {
-  collective::Agent p, a;
-  std::vector<double> conn;
-};
+using testing::dot;
 
-const Fixture& fixture() {
-  static const Fixture f = [] {
-    Fixture f;
-    Rng rng = make_rng(11, 1, 0);
-    f.p = collective::random_agent(rng);
-    f.a = collective::random_agent(rng);
-    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
-    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
-    f.conn = morph::init_connector_params(rng);
-    for (double& w : f.conn) w += 0.05 * normal(rng);
-    return f;
-  }();
-  return f;
-}
+// directions from stream 3
+std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_direction(n, seed, 3); }
 
 sim::Scene pair_in(const std::string& env) {
-  const Fixture& f = fixture();
+  const testing::GradientPair& f = testing::gradient_pair();
   return collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
 }
 
@@ -48,21 +33,6 @@ sim::RunResult run(const sim::Scene& s, bool grad, bool fl, int steps = kSteps) 
   opt.grad = grad;
   opt.float_networks = fl;
   return sim::simulate(s, opt);
-}
-
-double dot(const std::vector<double>& a, const std::vector<double>& b) {
-  double r = 0;
-  for (size_t i = 0; i < a.size(); ++i) r += a[i] * b[i];
-  return r;
-}
-
-std::vector<double> direction(size_t n, uint64_t seed) {
-  Rng rng = make_rng(seed, 3, n);
-  std::vector<double> d(n);
-  for (double& x : d) x = normal(rng);
-  const double norm = std::sqrt(dot(d, d));
-  for (double& x : d) x /= norm;
-  return d;
 }
 
 class FloatNetworks : public ::testing::TestWithParam<std::string> {};

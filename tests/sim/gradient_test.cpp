@@ -8,38 +8,22 @@
 
 #include "collective/builders.hpp"
 #include "io/environments.hpp"
-#include "morph/body.hpp"
 #include "sim/engine.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
 
 constexpr int kSteps = 150;
 
-struct Fixture {
-  collective::Agent p, a;
-  std::vector<double> conn;
-};
+using testing::dot;
 
-const Fixture& fixture() {
-  static const Fixture f = [] {
-    Fixture f;
-    Rng rng = make_rng(11, 1, 0);
-    f.p = collective::random_agent(rng);
-    f.a = collective::random_agent(rng);
-    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
-    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
-    f.conn = morph::init_connector_params(rng);
-    // nonzero biases so that every term matters
-    for (double& w : f.conn) w += 0.05 * normal(rng);
-    return f;
-  }();
-  return f;
-}
+// directions from stream 2
+std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_direction(n, seed, 2); }
 
 // a pair in `env`; terrain features start 0.003 u ahead of the front, so that walls are hit early
 sim::Scene pair_in(const std::string& env) {
-  const Fixture& f = fixture();
+  const testing::GradientPair& f = testing::gradient_pair();
   sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
@@ -78,21 +62,6 @@ Differences fd(const sim::Scene& s, const std::vector<double>& d, double eps, co
   if (rel(n.central) < 1e-4 || rel(n.forward) < 1e-3 || rel(n.backward) < 1e-3) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "reverse mode " << analytic << ", central " << n.central << ", forward "
                                        << n.forward << ", backward " << n.backward;
-}
-
-double dot(const std::vector<double>& a, const std::vector<double>& b) {
-  double r = 0;
-  for (size_t i = 0; i < a.size(); ++i) r += a[i] * b[i];
-  return r;
-}
-
-std::vector<double> direction(size_t n, uint64_t seed) {
-  Rng rng = make_rng(seed, 2, n);
-  std::vector<double> d(n);
-  for (double& x : d) x = normal(rng);
-  const double norm = std::sqrt(dot(d, d));
-  for (double& x : d) x /= norm;
-  return d;
 }
 
 class Gradient : public ::testing::TestWithParam<std::string> {};
@@ -153,7 +122,7 @@ INSTANTIATE_TEST_SUITE_P(EveryEnvironment, Gradient, ::testing::ValuesIn(io::env
 // a body dropped from above: the landing goes through the time of impact, and the gradient with respect
 // to the drop height (x0.y) matches finite differences
 TEST(Gradient, LandingThroughTimeOfImpact) {
-  sim::Scene s = collective::agent_scene(fixture().p, "flat");
+  sim::Scene s = collective::agent_scene(testing::gradient_pair().p, "flat");
   for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 0.05;
   sim::RunOptions opt;
   opt.steps = kSteps;
