@@ -12,7 +12,6 @@
 #include "common/check.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
-#include "mpi/stop.hpp"
 
 namespace divcoll::mpi {
 namespace {
@@ -137,48 +136,18 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     else if (done > 0)
       std::printf("%s: resuming after %s %d\n", label.c_str(), info.round_word.c_str(), done);
   }
-  // A step's records, and after a round's last step its commit (state, attributes, counter), are written
-  // while the next step's first items compute (FarmOptions::beside): the collective writes then leave no rank
-  // idle. The commit's checkpoint (a flush, sometimes a copy, and where a stop is honoured) follows that
-  // farm. The run file gets the same rows in the same order as before: a step's rows, then its commit,
-  // before anything of the next step; only the computing of the next step starts earlier.
-  struct Pending {
-    bool any = false;     // every rank: a step's records wait
-    Records rows;         // master: its rows
-    int commit = 0;       // every rank: rounds done to commit with them (0: none)
-    Records state;        // master: the plan's state right after that step
-    std::vector<std::pair<std::string, int64_t>> attrs;
-  } pending;
-  bool checkpoint_due = false;
-  DriverClock& clock = driver_clock();
-  // writes what waits; its time goes to `beside` when the farm runs it, else to writes and commits
-  auto write_pending = [&](bool in_farm) {
-    if (!pending.any) return;
-    auto t = std::chrono::steady_clock::now();
-    write_records(comm, file, pending.rows);
-    (in_farm ? clock.beside_s : clock.writes_s) += since(t);
-    if (pending.commit > 0) {
-      t = std::chrono::steady_clock::now();
-      write_records(comm, file, pending.state);
-      using Counts = std::vector<std::pair<std::string, int64_t>>;
-      for (const auto& [name, value] : broadcast(comm, rank == 0 ? pending.attrs : Counts{}))
-        write_attribute(file, info.group, name, value);
-      debug_exit_in_commit(comm, file, info.group, info.counter, pending.commit);
-      group.write_int(info.counter, pending.commit);
-      checkpoint_due = true;
-      (in_farm ? clock.beside_s : clock.commits_s) += since(t);
-    }
-    pending = Pending{};
-  };
-  auto checkpoint_if_due = [&] {
-    if (!checkpoint_due) return;
-    const auto tc = std::chrono::steady_clock::now();
+  auto commit = [&](int rounds_done) {
+    write_records(comm, file, rank == 0 ? plan.state() : Records{});
+    using Counts = std::vector<std::pair<std::string, int64_t>>;
+    for (const auto& [name, value] : broadcast(comm, rank == 0 ? plan.state_attributes() : Counts{}))
+      write_attribute(file, info.group, name, value);
+    debug_exit_in_commit(comm, file, info.group, info.counter, rounds_done);
+    group.write_int(info.counter, rounds_done);
     checkpoint();
-    checkpoint_due = false;
-    clock.commits_s += since(tc);
   };
 
   const auto t_stage = std::chrono::steady_clock::now();
+  DriverClock& clock = driver_clock();
   double last_print = -1e9;
   const int end = R + (plan.closing_round() ? 1 : 0);
   for (int r = done; r < end; ++r) {
@@ -192,21 +161,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
         into += std::chrono::duration<double>(now - tp).count();
         tp = now;
       };
-      // the round's input carries rank 0's word on whether a stop was asked for: then what waits is written
-      // and checkpointed now, where the stop is honoured, instead of beside the next items (a stop waits for
-      // one round at most, as before; a stop seen by another rank only is honoured one round later)
-      std::string input;
-      if (rank == 0) {
-        input.push_back(stop_signal() ? 's' : '-');
-        input.append(plan.round_input(step));
-      }
-      input = bcast_string(comm, input);
-      DIVCOLL_DEMAND(!input.empty() && (input[0] == 's' || input[0] == '-'));
-      if (input[0] == 's') {
-        write_pending(false);
-        checkpoint_if_due();
-      }
-      plan.take_input(step, input.substr(1));
+      plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
       lap(clock.input_s);
       const std::vector<std::string> items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
       lap(clock.items_s);
@@ -222,20 +177,18 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
           std::fflush(stdout);
         }
       };
-      if (pending.any) fo.beside = [&] { write_pending(true); };
       farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
-      checkpoint_if_due();
       tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
-      pending.any = true;
-      if (rank == 0) pending.rows = plan.end_round(step);
+      write_records(comm, file, rank == 0 ? plan.end_round(step) : Records{});
       lap(clock.writes_s);
     }
     ++clock.rounds;
     if (r >= R) continue;  // the closing round: recorded, not counted
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
     if ((r + 1) % every == 0 || r + 1 == R) {
-      pending.commit = r + 1;
-      if (rank == 0) pending.state = plan.state(), pending.attrs = plan.state_attributes();
+      const auto tc = std::chrono::steady_clock::now();
+      commit(r + 1);
+      clock.commits_s += since(tc);
     }
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
@@ -244,8 +197,6 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
       std::fflush(stdout);
     }
   }
-  write_pending(false);
-  checkpoint_if_due();
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
   if (rank == 0) {
     const std::string s = plan.finish_summary();

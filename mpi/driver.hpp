@@ -40,9 +40,6 @@ struct DriverClock {
   double writes_s = 0;   // the round's records (plan.end_round and the parallel writes)
   double commits_s = 0;  // commits: the state, the counter and the checkpoint
   long rounds = 0;
-  // not serial: a step's records and commit written while the next step's first items compute (inside
-  // farm(), FarmOptions::beside); the workers hold items meanwhile
-  double beside_s = 0;
 };
 DriverClock& driver_clock();
 

@@ -424,23 +424,21 @@ int run_session(const RunArgs& args) {
         g.write_string("busy_s_per_rank_last_session", busy_text);
         // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
         const DriverClock& dc = driver_clock();
-        double serial[5] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
-                            dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s,
-                            dc.beside_s - dbefore.beside_s};
-        MPI_Bcast(serial, 5, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
-        char serial_text[200];
-        // beside: writes made while items computed (not serial; listed so that no write goes unseen)
-        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f,beside=%.3f",
-                      serial[0], serial[1], serial[2], serial[3], serial[4]);
+        double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
+                            dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
+        MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
+        char serial_text[160];
+        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
+                      serial[1], serial[2], serial[3]);
         g.write_string("master_serial_s_last_session", serial_text);
         if (rank == 0) {  // run_with_status has marked the stage complete
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
                       name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
                       busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
           std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
-                      "commits %.2f s); writes beside the items %.2f s\n",
+                      "commits %.2f s)\n",
                       name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
-                      serial[0], serial[1], serial[2], serial[3], serial[4]);
+                      serial[0], serial[1], serial[2], serial[3]);
         }
       }
     } catch (const StopRequested& stop) {

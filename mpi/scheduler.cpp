@@ -313,7 +313,6 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       t.join();
     }
   } joiner{local, sh, next, n};
-  if (opt.beside) opt.beside();  // the workers hold their first blocks; this rank's thread computes
   int64_t done = 0, folded = 0;
   auto finished = [&](int64_t k) {
     for (int64_t q = 0; q < k; ++q) {
@@ -390,8 +389,8 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   clock.items += sh.items;
 }
 
-void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute,
-                  const std::function<void()>& beside, FarmResult& out, FarmClock& clock) {
+void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute, FarmResult& out,
+                  FarmClock& clock) {
   struct Block {
     int64_t first = 0;
     std::vector<std::string> data;  // tasks, then their results
@@ -443,26 +442,21 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
 
   Sender sender(comm);
   Receiver receiver;
-  bool got_end = false, end_probed = false, started = false, beside_done = !beside;
+  bool got_end = false;
   Backoff backoff;
   for (;;) {
     bool active = false;
-    // tasks, matched in the order the master sent them, up to kRoundEnd: what follows it is the next round's
-    // (the master may send it before this rank has left this round: nothing collective lies between two
-    // rounds when the driver writes beside the items)
-    while (!end_probed) {
+    for (;;) {  // tasks (matched in the order the master sent them; nothing follows kRoundEnd)
       int flag = 0;
       MPI_Message msg;
       MPI_Status st;
       MPI_Improbe(0, MPI_ANY_TAG, comm, &flag, &msg, &st);
       if (!flag) break;
       active = true;
-      end_probed = st.MPI_TAG == kRoundEnd;
       receiver.receive(msg, st);
     }
     for (const auto& m : receiver.take()) {
       active = true;
-      started = true;
       if (m->tag == kRoundEnd) {
         got_end = true;
         continue;
@@ -473,10 +467,6 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
         queued.push_back(Block{first, std::move(tasks)});
       }
       sh.to_worker.notify_one();
-    }
-    if (started && !beside_done) {  // the thread computes the first block (or the round has none for us)
-      beside_done = true;
-      beside();
     }
     std::deque<Block> ready;
     bool idle = false;
@@ -553,7 +543,6 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   if (size == 1) {
     out.results.resize(n);
     out.owner.assign(n, 0);
-    if (opt.beside) opt.beside();
     for (int64_t i = 0; i < n; ++i) {
       out.results[i] = timed_compute(compute, items[i], clock.compute_s);
       ++clock.items;
@@ -571,7 +560,7 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   out.results.assign(n, std::string());
   out.owner.assign(n, 0);
   if (rank == 0) serve_master(comm, size, n, items, compute, opt, out, clock);
-  else serve_worker(comm, compute, opt.beside, out, clock);
+  else serve_worker(comm, compute, out, clock);
   if (n > 0) {
     MPI_Request req;
     MPI_Ibcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm, &req);

@@ -35,12 +35,6 @@ struct FarmOptions {
   // called on the master, in item order, as soon as items 0..i all have results (from farm()'s calling
   // thread, while later items are still being computed): lets the caller fold results during the round
   std::function<void(int64_t, const std::string&)> on_result;
-  // called once on every rank's serving thread while the round's first items compute: on the master once its
-  // first blocks are handed out and its own thread has started, on a worker once its first block (or the
-  // round's end) has arrived. It may make collective calls on another communicator: the driver writes the
-  // previous round's records there (collective HDF5 writes), so that they cost the ranks no idle time. Every
-  // rank passes one or none. With one rank it runs before the items
-  std::function<void()> beside;
 };
 
 // items: serialized tasks (significant on rank 0 only). compute: task bytes → result bytes; it runs in a

@@ -31,8 +31,7 @@ def _s(v):
 
 
 def parse_serial(text):
-    """'input=0.1,items=0.0,writes=0.2,commits=0.0[,beside=0.1]' -> {name: seconds} ({} when absent or unreadable);
-    beside (writes made while items computed) is not serial time"""
+    """'input=0.1,items=0.0,writes=0.2,commits=0.0' -> {name: seconds} ({} when absent or unreadable)"""
     out = {}
     for part in _s(text).split(","):
         name, _, value = part.partition("=")
@@ -60,7 +59,7 @@ def read(out):
                                  busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
                                  master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
                                  imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan"),
-                                 serial_s=sum(v for k, v in serial.items() if k != "beside") if serial else float("nan")))
+                                 serial_s=sum(serial.values()) if serial else float("nan")))
     return sorted(rows, key=lambda r: (r["ranks"], STAGES.index(r["stage"])))
 
 

@@ -2,15 +2,12 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
-#include <atomic>
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <vector>
 #include <filesystem>
 #include <string>
-#include <thread>
 
 #include "io/h5.hpp"
 #include "mpi/protocol.hpp"
@@ -181,47 +178,6 @@ TEST(Farm, WorkersShareTheWorkWhenItemsAreSlow) {
   std::vector<int> per_rank(size_of(), 0);
   for (int o : r.owner) ++per_rank[o];
   for (int q = 1; q < size_of(); ++q) EXPECT_GT(per_rank[q], 0) << "worker " << q << " got no item";
-}
-
-// FarmOptions::beside (the driver writes a round's records there): called exactly once on every rank, for
-// any item count, free to make a collective call on another communicator, and on a worker while its first
-// items compute (it waits, bounded, for its thread to start one); the results are those of a farm without it
-TEST(Farm, BesideRunsOnceOnEveryRankWhileItemsComputeAndMayCallCollectives) {
-  MPI_Comm other;
-  MPI_Comm_dup(MPI_COMM_WORLD, &other);
-  for (const int n : {0, 1, 40}) {
-    std::vector<std::string> items;
-    if (rank_of() == 0)
-      for (int i = 0; i < n; ++i) items.push_back(mpi::pack(static_cast<int64_t>(i)));
-    std::atomic<int> started{0};
-    auto compute = [&](const std::string& b) {
-      ++started;
-      double s = 0;
-      for (int k = 0; k < 200000; ++k) s += 1e-9 * k;
-      return mpi::pack(mpi::unpack<int64_t>(b) * 3 + static_cast<int64_t>(s < 0));
-    };
-    int calls = 0, ranks_in = 0, started_then = -1;
-    mpi::FarmOptions fo;
-    fo.beside = [&] {
-      ++calls;
-      if (size_of() > 1 && rank_of() > 0 && n >= size_of())  // a worker holds a block: its thread starts it
-        for (int w = 0; w < 60000 && started.load() == 0; ++w) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      started_then = started.load();
-      int one = 1;
-      MPI_Allreduce(&one, &ranks_in, 1, MPI_INT, MPI_SUM, other);
-    };
-    const mpi::FarmResult with = mpi::farm(MPI_COMM_WORLD, items, compute, fo);
-    EXPECT_EQ(calls, 1) << n << " items";
-    EXPECT_EQ(ranks_in, size_of()) << n << " items";
-    if (size_of() > 1 && rank_of() > 0 && n >= size_of()) {
-      EXPECT_GT(started_then, 0) << "worker " << rank_of() << ": beside ran before any of its items had started";
-    }
-    const mpi::FarmResult without = mpi::farm(MPI_COMM_WORLD, items, compute);
-    if (rank_of() == 0) {
-      EXPECT_EQ(with.results, without.results) << n << " items";
-    }
-  }
-  MPI_Comm_free(&other);
 }
 
 TEST(ParallelHdf5, EachRankWritesItsRowsOfOneDataset) {
