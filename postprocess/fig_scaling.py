@@ -3,7 +3,9 @@
 speed-up, each stage's busy fraction (in all, and of each rank: seconds computing items / wall seconds),
 load imbalance and the master's serial seconds (its time outside the farm while the workers wait: the rounds'
 inputs, items, writes and commits; runs made before the attribute existed show none), read from
-OUT/run_np<N>.h5.
+OUT/run_np<N>.h5. With OUT/concurrent_a.h5 and OUT/concurrent_b.h5 (bench-scaling.sh's "1+1": two independent
+1-rank runs at once) and a 1-rank run, a column gives the machine's cap for 2 ranks per stage, 2 × t(1 rank) /
+mean t(each of the two at once), and the 2-rank cell says what share of that cap it reached.
 
     /usr/bin/python3 postprocess/fig_scaling.py OUT [--cores C]
 
@@ -45,22 +47,39 @@ def parse_serial(text):
 def read(out):
     rows = []
     for path in glob.glob(os.path.join(out, "run_np*.h5")):
-        n = int(re.search(r"run_np(\d+)\.h5$", path).group(1))
-        with h5py.File(path, "r") as f:
-            for st in STAGES:
-                if st not in f or "wall_s_last_session" not in f[st].attrs:
-                    continue
-                g = f[st]
-                busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
-                wall = float(g.attrs["wall_s_last_session"])
-                serial = parse_serial(g.attrs.get("master_serial_s_last_session", ""))
-                rows.append(dict(ranks=n, stage=st, wall_s=wall,
-                                 rank_busy=[b / wall for b in busy] if wall > 0 else [],
-                                 busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
-                                 master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
-                                 imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan"),
-                                 serial_s=sum(serial.values()) if serial else float("nan")))
+        m = re.search(r"run_np(\d+)\.h5$", path)
+        if not m:
+            continue
+        rows += _stage_rows(path, int(m.group(1)))
     return sorted(rows, key=lambda r: (r["ranks"], STAGES.index(r["stage"])))
+
+
+def read_concurrent(out):
+    """{stage: [wall s of concurrent_a, of concurrent_b]} for stages both runs have ({} without both files)"""
+    paths = [os.path.join(out, f"concurrent_{side}.h5") for side in "ab"]
+    if not all(os.path.exists(p) for p in paths):
+        return {}
+    walls = [{r["stage"]: r["wall_s"] for r in _stage_rows(p, 1)} for p in paths]
+    return {st: [walls[0][st], walls[1][st]] for st in STAGES if st in walls[0] and st in walls[1]}
+
+
+def _stage_rows(path, n):
+    rows = []
+    with h5py.File(path, "r") as f:
+        for st in STAGES:
+            if st not in f or "wall_s_last_session" not in f[st].attrs:
+                continue
+            g = f[st]
+            busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
+            wall = float(g.attrs["wall_s_last_session"])
+            serial = parse_serial(g.attrs.get("master_serial_s_last_session", ""))
+            rows.append(dict(ranks=n, stage=st, wall_s=wall,
+                             rank_busy=[b / wall for b in busy] if wall > 0 else [],
+                             busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
+                             master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
+                             imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan"),
+                             serial_s=sum(serial.values()) if serial else float("nan")))
+    return rows
 
 
 def main(argv=None):
@@ -80,22 +99,51 @@ def main(argv=None):
     ranks = sorted({r["ranks"] for r in rows})
     stages = [s for s in STAGES if any(r["stage"] == s for r in rows)]
     wall = {(r["ranks"], r["stage"]): r for r in rows}
+    conc = read_concurrent(a.out) if 1 in ranks else {}
+
+    def cap(st):
+        """2 x t(1 rank) / mean t(two 1-rank runs at once), or None"""
+        if st == "total":
+            if not all(s in conc and (1, s) in wall for s in stages):
+                return None
+            return 2 * sum(wall[(1, s)]["wall_s"] for s in stages) / sum(np.mean(conc[s]) for s in stages)
+        if st not in conc or (1, st) not in wall:
+            return None
+        return 2 * wall[(1, st)]["wall_s"] / np.mean(conc[st])
+
     md = ["| stage | " + " | ".join(f"{n} rank{'s' if n > 1 else ''}{' (oversubscribed)' if n > a.cores else ''}"
-                                     for n in ranks) + " |",
-          "|---|" + "---|" * len(ranks)]
+                                     for n in ranks) +
+          (" | two 1-rank runs at once: each, and the cap for 2 ranks" if conc else "") + " |",
+          "|---|" + "---|" * (len(ranks) + (1 if conc else 0))]
     for st in stages + ["total"]:
         cells = []
         for n in ranks:
+            of_cap = ""
+            if n == 2 and ranks[0] == 1 and cap(st) is not None:
+                w2 = (sum(wall[(2, s)]["wall_s"] for s in stages if (2, s) in wall) if st == "total" else
+                      wall[(2, st)]["wall_s"] if (2, st) in wall else None)
+                w1 = (sum(wall[(1, s)]["wall_s"] for s in stages) if st == "total" else wall[(1, st)]["wall_s"])
+                if w2:
+                    of_cap = f", {w1 / w2 / cap(st):.0%} of the cap"
             if st == "total":
                 w = sum(wall[(n, s)]["wall_s"] for s in stages if (n, s) in wall)
                 base = sum(wall[(ranks[0], s)]["wall_s"] for s in stages if (ranks[0], s) in wall)
-                cells.append(f"**{w:.1f} s** (×{base / w:.2f})")
+                cells.append(f"**{w:.1f} s** (×{base / w:.2f}{of_cap})")
             elif (n, st) in wall:
                 r = wall[(n, st)]
-                speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f})" if (ranks[0], st) in wall and n != ranks[0] else ""
+                speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f}{of_cap})" if (ranks[0], st) in wall and n != ranks[0] else ""
                 serial = f", serial {r['serial_s']:.2f} s" if np.isfinite(r["serial_s"]) else ""
                 cells.append(f"{r['wall_s']:.1f} s{speed}, busy {r['busy_fraction']:.0%} (per rank "
                              f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}{serial}")
+            else:
+                cells.append("—")
+        if conc:
+            c = cap(st)
+            if st == "total":
+                each = [sum(conc[s][k] for s in stages if s in conc) for k in (0, 1)]
+                cells.append(f"{each[0]:.1f} s, {each[1]:.1f} s: **cap ×{c:.2f}**" if c is not None else "—")
+            elif st in conc:
+                cells.append(f"{conc[st][0]:.1f} s, {conc[st][1]:.1f} s" + (f": cap ×{c:.2f}" if c is not None else ""))
             else:
                 cells.append("—")
         md.append(f"| {st} | " + " | ".join(cells) + " |")

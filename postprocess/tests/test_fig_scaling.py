@@ -58,6 +58,41 @@ class FigScalingTest(unittest.TestCase):
             self.assertEqual(csv[0].split(",")[6], "master_serial_s")
             self.assertTrue(os.path.getsize(os.path.join(d, "scaling.png")) > 0)
 
+    def test_two_one_rank_runs_at_once_give_the_cap_for_two_ranks(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_run(os.path.join(d, "run_np1.h5"), {"agents": (10.0, [9.0], None), "deploy": (20.0, [19.0], None)})
+            write_run(os.path.join(d, "run_np2.h5"), {"agents": (6.0, [5.0, 5.0], None), "deploy": (11.0, [10.0, 10.0], None)})
+            # at once, each is slower than alone: agents 11 and 13 s (cap 2 x 10 / 12 = 1.67), deploy 20 s (cap 2.00)
+            write_run(os.path.join(d, "concurrent_a.h5"), {"agents": (11.0, [10.0], None), "deploy": (20.0, [19.0], None)})
+            write_run(os.path.join(d, "concurrent_b.h5"), {"agents": (13.0, [12.0], None), "deploy": (20.0, [19.0], None)})
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.assertEqual(F.main([d, "--cores", "2"]), 0)
+            md = open(os.path.join(d, "scaling.md")).read().splitlines()
+            self.assertIn("two 1-rank runs at once", md[0])
+            self.assertEqual(md[1].count("---"), 4)  # stage, 1 rank, 2 ranks, at once
+            agents = next(line for line in md if line.startswith("| agents"))
+            # 2 ranks: 10 / 6 = x1.67, which is 100% of the cap x1.67
+            self.assertIn("6.0 s (×1.67, 100% of the cap)", agents)
+            self.assertIn("11.0 s, 13.0 s: cap ×1.67", agents)
+            deploy = next(line for line in md if line.startswith("| deploy"))
+            self.assertIn("11.0 s (×1.82, 91% of the cap)", deploy)
+            self.assertIn("20.0 s, 20.0 s: cap ×2.00", deploy)
+            total = next(line for line in md if line.startswith("| total"))
+            # cap of the whole: 2 x 30 / mean(31, 33) = 1.875; 2 ranks 30 / 17 = 1.765 = 94% of it
+            self.assertIn("**17.0 s** (×1.76, 94% of the cap)", total)
+            self.assertIn("31.0 s, 33.0 s: **cap ×1.88**", total)
+
+    def test_without_both_concurrent_runs_there_is_no_cap_column(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_run(os.path.join(d, "run_np1.h5"), {"agents": (10.0, [9.0], None)})
+            write_run(os.path.join(d, "run_np2.h5"), {"agents": (6.0, [5.0, 5.0], None)})
+            write_run(os.path.join(d, "concurrent_a.h5"), {"agents": (11.0, [10.0], None)})
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.assertEqual(F.main([d, "--cores", "2"]), 0)
+            md = open(os.path.join(d, "scaling.md")).read()
+            self.assertNotIn("cap", md)
+            self.assertEqual(F.read_concurrent(d), {})
+
 
 if __name__ == "__main__":
     unittest.main()
