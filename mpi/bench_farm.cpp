@@ -86,7 +86,8 @@ int bench_farm_main(int argc, char** argv, const BenchFarmArgs& a) {
     s.master = {c.compute_s - before.compute_s, c.farm_s - before.farm_s, c.items - before.items,
                 c.serve_cpu_s - before.serve_cpu_s, c.task_s - before.task_s, c.result_s - before.result_s,
                 c.task_msgs - before.task_msgs, c.result_msgs - before.result_msgs, c.results - before.results,
-                c.task_bytes - before.task_bytes, c.result_bytes - before.result_bytes};
+                c.task_bytes - before.task_bytes, c.result_bytes - before.result_bytes,
+                c.compute_cpu_s - before.compute_cpu_s};
     if (round > 0) rounds.push_back(s);
   }
   if (rank == 0) {

@@ -405,23 +405,37 @@ int run_session(const RunArgs& args) {
         // a finished stage is never redone on --resume: its end is a forced checkpoint
         run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-        // how busy each rank was (seconds computing items), gathered on every rank
-        double busy = farm_clock().compute_s - before.compute_s;
+        // how busy each rank was (seconds computing items), and the CPU seconds of its computing and serving
+        // threads, gathered on every rank
+        const FarmClock& fc = farm_clock();
+        double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
+                          fc.serve_cpu_s - before.serve_cpu_s};
+        std::vector<double> all(3 * static_cast<size_t>(size));
+        MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, MPI_COMM_WORLD);
+        auto per_rank = [&](int k) {  // "r0,r1,..." of column k
+          std::string text;
+          for (int r = 0; r < size; ++r) {
+            char tmp[32];
+            std::snprintf(tmp, sizeof tmp, "%s%.3f", r == 0 ? "" : ",", all[3 * static_cast<size_t>(r) + k]);
+            text += tmp;
+          }
+          return text;
+        };
         std::vector<double> busy_all(size);
-        MPI_Allgather(&busy, 1, MPI_DOUBLE, busy_all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
-        std::string busy_text;
         double busy_sum = 0, busy_max = 0;
-        for (double b : busy_all) {
-          char tmp[32];
-          std::snprintf(tmp, sizeof tmp, "%s%.3f", busy_text.empty() ? "" : ",", b);
-          busy_text += tmp;
+        for (int r = 0; r < size; ++r) {
+          const double b = busy_all[r] = all[3 * static_cast<size_t>(r)];
           busy_sum += b, busy_max = std::max(busy_max, b);
         }
         io::h5::Node g = file.group(name);
         g.write_double("wall_s_last_session", wall);
         g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
         // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
-        g.write_string("busy_s_per_rank_last_session", busy_text);
+        g.write_string("busy_s_per_rank_last_session", per_rank(0));
+        // CPU seconds of each rank's computing thread inside compute() (below busy: it was descheduled) and of
+        // its serving thread inside the farm (0 at one rank)
+        g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
+        g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
         // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
         const DriverClock& dc = driver_clock();
         double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
@@ -439,6 +453,13 @@ int run_session(const RunArgs& args) {
                       "commits %.2f s)\n",
                       name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
                       serial[0], serial[1], serial[2], serial[3]);
+          if (size > 1 && busy_sum > 0 && wall > 0) {
+            double cpu_sum = 0, serve_sum = 0;
+            for (int r = 0; r < size; ++r) cpu_sum += all[3 * static_cast<size_t>(r) + 1], serve_sum += all[3 * static_cast<size_t>(r) + 2];
+            std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
+                        "core each\n",
+                        name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
+          }
         }
       }
     } catch (const StopRequested& stop) {

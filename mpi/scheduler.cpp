@@ -31,12 +31,17 @@ double thread_cpu_s() {
 
 // how long a thread with nothing to do sleeps before it looks again: 20 µs after something happened,
 // doubling up to 2 ms, so a waiting rank costs its core under 1% and answers within 2 ms (a worker is
-// woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work)
+// woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work).
+// A serving thread whose own computing thread has work, with no message of its own in flight, sleeps the
+// whole 2 ms at once instead (see `calm` in serve_master and serve_worker): each wake-up takes the core from
+// that computing thread, and the ramp from 20 µs after every message had cost it 2-3% of its time
 class Backoff {
  public:
   static constexpr int kMinUs = 20, kMaxUs = 2000;
   // the master's longest look-away in a round's tail, where a worker waits for its next item
   static constexpr int kTailUs = 200;
+  // a calm worker's look-away: its computing thread has a block and wakes it when it finishes
+  static constexpr int kCalmWorkerUs = 10000;
 
   void reset() { us_ = kMinUs; }
   // the next sleep, at most max_us (the doubling goes on up to kMaxUs regardless)
@@ -176,6 +181,7 @@ class Sender {
   void wait_all() {
     for (Backoff b; reap(), !inflight_.empty();) b.sleep();
   }
+  bool empty() const { return inflight_.empty(); }
 
  private:
   MPI_Comm comm_;
@@ -201,15 +207,18 @@ struct Shared {
   std::condition_variable to_server;  // something finished (or failed)
   std::condition_variable to_worker;  // a block was queued (or the round is over)
   std::exception_ptr error;
-  double compute_s = 0;
+  double compute_s = 0, compute_cpu_s = 0;
   long items = 0;
 };
 
-// records one compute() call's time
+// records one compute() call's time: wall seconds, and CPU seconds of the calling thread (less than the wall
+// when the thread was descheduled: by its rank's serving thread, another process or the host)
 std::string timed_compute(const std::function<std::string(const std::string&)>& compute, const std::string& task,
-                          double& seconds) {
+                          double& seconds, double& cpu_seconds) {
   const auto t0 = Clock::now();
+  const double c0 = thread_cpu_s();
   std::string r = compute(task);
+  cpu_seconds += thread_cpu_s() - c0;
   seconds += seconds_since(t0);
   return r;
 }
@@ -270,7 +279,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   if (master_computes && n > 0) {
     local_running = true;
     local = std::thread([&] {
-      double secs = 0;
+      double secs = 0, cpu = 0;
       long count = 0;
       std::unique_lock lk(sh.mu);
       while (next < n && !sh.error) {
@@ -279,7 +288,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
         lk.unlock();
         std::string r;
         try {
-          r = timed_compute(compute, items[i], secs);
+          r = timed_compute(compute, items[i], secs, cpu);
         } catch (...) {
           lk.lock();
           sh.error = std::current_exception();
@@ -292,6 +301,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
         sh.to_server.notify_one();
       }
       sh.compute_s += secs;
+      sh.compute_cpu_s += cpu;
       sh.items += count;
       local_running = false;
       sh.to_server.notify_one();
@@ -374,18 +384,24 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     for (; folded < fold_to; ++folded) opt.on_result(folded, out.results[folded]);
     sender.reap();
     if (done == n && open_workers == 0 && !running) break;
-    if (active) {
+    // calm: this core's computing thread is at work, nothing of ours is in flight and no worker waits for
+    // its next item (the tail), so nothing here is urgent: the computing thread's next item wakes us, and a
+    // worker's result can wait 2 ms (it holds its next block)
+    const bool calm = running && sender.empty() && receiver.empty() && !in_tail(n - next);
+    if (active && !calm) {
       backoff.reset();
     } else {
       std::unique_lock lk(sh.mu);
       // in the round's tail a worker waits for its next item: look more often
-      sh.to_server.wait_for(lk, backoff.next(in_tail(n - next) ? Backoff::kTailUs : Backoff::kMaxUs),
-                            [&] { return local_new > 0 || sh.error || (!local_running && running); });
+      const auto nap = calm ? std::chrono::microseconds(Backoff::kMaxUs)
+                            : backoff.next(in_tail(n - next) ? Backoff::kTailUs : Backoff::kMaxUs);
+      sh.to_server.wait_for(lk, nap, [&] { return local_new > 0 || sh.error || (!local_running && running); });
     }
   }
   if (local.joinable()) local.join();
   sender.wait_all();
   clock.compute_s += sh.compute_s;
+  clock.compute_cpu_s += sh.compute_cpu_s;
   clock.items += sh.items;
 }
 
@@ -399,7 +415,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
   std::deque<Block> queued, computed;
   bool busy = false, stop = false;
   std::thread worker([&] {
-    double secs = 0;
+    double secs = 0, cpu = 0;
     long count = 0;
     std::unique_lock lk(sh.mu);
     for (;;) {
@@ -410,7 +426,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
       busy = true;
       lk.unlock();
       try {
-        for (std::string& x : b.data) x = timed_compute(compute, x, secs), ++count;
+        for (std::string& x : b.data) x = timed_compute(compute, x, secs, cpu), ++count;
       } catch (...) {
         lk.lock();
         sh.error = std::current_exception();
@@ -424,6 +440,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
       sh.to_server.notify_one();
     }
     sh.compute_s += secs;
+    sh.compute_cpu_s += cpu;
     sh.items += count;
   });
   auto finish_thread = [&] {
@@ -485,16 +502,21 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
     }
     sender.reap();
     if (got_end && idle && ready.empty() && receiver.empty()) break;
-    if (active) {
+    // calm: the computing thread has a block, and nothing of ours is in flight: its finished block wakes
+    // us, and the master's next block can wait until then (we look every 10 ms all the same)
+    const bool calm = !idle && sender.empty() && receiver.empty();
+    if (active && !calm) {
       backoff.reset();
     } else {
       std::unique_lock lk(sh.mu);
-      sh.to_server.wait_for(lk, backoff.next(), [&] { return !computed.empty() || sh.error; });
+      const auto nap = calm ? std::chrono::microseconds(Backoff::kCalmWorkerUs) : backoff.next();
+      sh.to_server.wait_for(lk, nap, [&] { return !computed.empty() || sh.error; });
     }
   }
   finish_thread();
   sender.wait_all();
   clock.compute_s += sh.compute_s;
+  clock.compute_cpu_s += sh.compute_cpu_s;
   clock.items += sh.items;
 }
 
@@ -537,14 +559,14 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
-  const double cpu0 = rank == 0 ? thread_cpu_s() : 0.0;
+  const double cpu0 = thread_cpu_s();
   int64_t n = static_cast<int64_t>(items.size());
   FarmResult out;
   if (size == 1) {
     out.results.resize(n);
     out.owner.assign(n, 0);
     for (int64_t i = 0; i < n; ++i) {
-      out.results[i] = timed_compute(compute, items[i], clock.compute_s);
+      out.results[i] = timed_compute(compute, items[i], clock.compute_s, clock.compute_cpu_s);
       ++clock.items;
       if (opt.progress) opt.progress(static_cast<int>(i + 1), static_cast<int>(n));
       if (opt.on_result) opt.on_result(i, out.results[i]);
@@ -566,7 +588,7 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
     MPI_Ibcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm, &req);
     wait_sleeping(req);
   }
-  if (rank == 0) clock.serve_cpu_s += thread_cpu_s() - cpu0;
+  clock.serve_cpu_s += thread_cpu_s() - cpu0;
   clock.farm_s += seconds_since(t_farm);
   return out;
 }

@@ -46,15 +46,18 @@ struct FarmResult {
   std::vector<int> owner;
 };
 // this rank's running totals over every farm() call: seconds inside compute() and inside farm()
-// (the rest of a stage's wall time is the master's own work, I/O and checkpoints), and on rank 0 the cost
-// of serving: CPU seconds of the serving thread, seconds spent sending tasks and taking in results,
-// messages and bytes each way
+// (the rest of a stage's wall time is the master's own work, I/O and checkpoints), CPU seconds of the
+// serving thread (the calling thread, inside farm(), beside the computing thread; 0 at one rank, where the
+// calling thread computes), and on rank 0 the cost of serving: seconds spent sending tasks and taking in
+// results, messages and bytes each way; last, the CPU seconds of the computing thread inside compute() (its
+// wall seconds there are compute_s)
 struct FarmClock {
   double compute_s = 0, farm_s = 0;
   long items = 0;
   double serve_cpu_s = 0, task_s = 0, result_s = 0;
   long task_msgs = 0, result_msgs = 0, results = 0;
   double task_bytes = 0, result_bytes = 0;
+  double compute_cpu_s = 0;
 };
 FarmClock& farm_clock();
 

@@ -2,7 +2,10 @@
 """Table and plot of a scaling benchmark (jobs/bench-scaling.sh): wall time per stage against ranks,
 speed-up, each stage's busy fraction (in all, and of each rank: seconds computing items / wall seconds),
 load imbalance and the master's serial seconds (its time outside the farm while the workers wait: the rounds'
-inputs, items, writes and commits; runs made before the attribute existed show none), read from
+inputs, items, writes and commits; runs made before the attribute existed show none), and at more than one
+rank the share of their busy time the computing threads spent on a core (CPU / wall seconds inside compute():
+below 100% when the serving thread, another process or the host took the core) and the serving threads' CPU as
+a share of a core, read from
 OUT/run_np<N>.h5. With OUT/concurrent_a.h5 and OUT/concurrent_b.h5 (bench-scaling.sh's "1+1": two independent
 1-rank runs at once) and a 1-rank run, a column gives the machine's cap for 2 ranks per stage, 2 × t(1 rank) /
 mean t(each of the two at once), and the 2-rank cell says what share of that cap it reached.
@@ -73,12 +76,18 @@ def _stage_rows(path, n):
             busy = [float(x) for x in _s(g.attrs.get("busy_s_per_rank_last_session", "")).split(",") if x]
             wall = float(g.attrs["wall_s_last_session"])
             serial = parse_serial(g.attrs.get("master_serial_s_last_session", ""))
+            # CPU seconds per rank of the computing threads inside compute() and of the serving threads (runs
+            # made before these attributes existed have none)
+            ccpu = [float(x) for x in _s(g.attrs.get("compute_cpu_s_per_rank_last_session", "")).split(",") if x]
+            scpu = [float(x) for x in _s(g.attrs.get("serve_cpu_s_per_rank_last_session", "")).split(",") if x]
             rows.append(dict(ranks=n, stage=st, wall_s=wall,
                              rank_busy=[b / wall for b in busy] if wall > 0 else [],
                              busy_fraction=sum(busy) / (n * wall) if busy and wall > 0 else float("nan"),
                              master_busy=busy[0] / wall if busy and wall > 0 else float("nan"),
                              imbalance=max(busy) / np.mean(busy) if busy and np.mean(busy) > 0 else float("nan"),
-                             serial_s=sum(serial.values()) if serial else float("nan")))
+                             serial_s=sum(serial.values()) if serial else float("nan"),
+                             on_cpu=sum(ccpu) / sum(busy) if ccpu and busy and sum(busy) > 0 else float("nan"),
+                             serve_cpu=sum(scpu) / (n * wall) if scpu and wall > 0 else float("nan")))
     return rows
 
 
@@ -133,6 +142,10 @@ def main(argv=None):
                 r = wall[(n, st)]
                 speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f}{of_cap})" if (ranks[0], st) in wall and n != ranks[0] else ""
                 serial = f", serial {r['serial_s']:.2f} s" if np.isfinite(r["serial_s"]) else ""
+                if n > 1 and np.isfinite(r["on_cpu"]):
+                    serial += f", computing on a core {r['on_cpu']:.0%} of busy"
+                if n > 1 and np.isfinite(r["serve_cpu"]):
+                    serial += f", serving {r['serve_cpu']:.1%} of a core"
                 cells.append(f"{r['wall_s']:.1f} s{speed}, busy {r['busy_fraction']:.0%} (per rank "
                              f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}{serial}")
             else:

@@ -19,8 +19,9 @@ sys.path.insert(0, os.path.dirname(HERE))
 import fig_scaling as F  # noqa: E402
 
 
-def write_run(path, stages):
-    """stages: {name: (wall s, busy per rank, serial text or None)}"""
+def write_run(path, stages, cpu=None):
+    """stages: {name: (wall s, busy per rank, serial text or None)}; cpu: {name: (compute CPU s per rank, serving
+    CPU s per rank)}"""
     with h5py.File(path, "w") as f:
         for name, (wall, busy, serial) in stages.items():
             g = f.create_group(name)
@@ -28,6 +29,9 @@ def write_run(path, stages):
             g.attrs["busy_s_per_rank_last_session"] = ",".join(str(b) for b in busy)
             if serial is not None:
                 g.attrs["master_serial_s_last_session"] = serial
+            if cpu and name in cpu:
+                g.attrs["compute_cpu_s_per_rank_last_session"] = ",".join(str(c) for c in cpu[name][0])
+                g.attrs["serve_cpu_s_per_rank_last_session"] = ",".join(str(c) for c in cpu[name][1])
 
 
 class FigScalingTest(unittest.TestCase):
@@ -81,6 +85,19 @@ class FigScalingTest(unittest.TestCase):
             # cap of the whole: 2 x 30 / mean(31, 33) = 1.875; 2 ranks 30 / 17 = 1.765 = 94% of it
             self.assertIn("**17.0 s** (×1.76, 94% of the cap)", total)
             self.assertIn("31.0 s, 33.0 s: **cap ×1.88**", total)
+
+    def test_cpu_shares_of_the_computing_and_serving_threads(self):
+        with tempfile.TemporaryDirectory() as d:
+            write_run(os.path.join(d, "run_np1.h5"), {"agents": (10.0, [9.0], None)}, {"agents": ([9.0], [0.0])})
+            # busy 5 + 4 s, on a core 4.5 + 3.6 s = 90%; serving 0.1 + 0.2 s of 2 x 5 s = 3.0% of a core
+            write_run(os.path.join(d, "run_np2.h5"), {"agents": (5.0, [5.0, 4.0], None)},
+                      {"agents": ([4.5, 3.6], [0.1, 0.2])})
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.assertEqual(F.main([d, "--cores", "2"]), 0)
+            md = open(os.path.join(d, "scaling.md")).read()
+            agents = next(line for line in md.splitlines() if line.startswith("| agents"))
+            self.assertIn("computing on a core 90% of busy, serving 3.0% of a core", agents)
+            self.assertEqual(agents.count("computing on a core"), 1)  # not at 1 rank
 
     def test_without_both_concurrent_runs_there_is_no_cap_column(self):
         with tempfile.TemporaryDirectory() as d:

@@ -18,7 +18,9 @@ namespace {
 using Labels = Axis::Labels;
 
 // the attributes every stage group gets from the run command (timing; `divcoll compare` ignores them)
-const std::string kTiming = "wall_s,wall_s_last_session,busy_s_per_rank_last_session,master_serial_s_last_session";
+const std::string kTiming =
+    "wall_s,wall_s_last_session,busy_s_per_rank_last_session,master_serial_s_last_session,"
+    "compute_cpu_s_per_rank_last_session,serve_cpu_s_per_rank_last_session";
 
 std::vector<std::string> split(std::string_view s, char sep = ',') {
   std::vector<std::string> out;
