@@ -5,7 +5,8 @@ load imbalance and the master's serial seconds (its time outside the farm while 
 inputs, items, writes and commits; runs made before the attribute existed show none), and at more than one
 rank the share of their busy time the computing threads spent on a core (CPU / wall seconds inside compute():
 below 100% when the serving thread, another process or the host took the core) and the serving threads' CPU as
-a share of a core, read from
+a share of a core, and at 2 ranks the speed-up those shares imply (`implied`: 2 x busy share x on-core share /
+the 1-rank busy share), read from
 OUT/run_np<N>.h5. With OUT/concurrent_a.h5 and OUT/concurrent_b.h5 (bench-scaling.sh's "1+1": two independent
 1-rank runs at once) and a 1-rank run, a column gives the machine's cap for 2 ranks per stage, 2 × t(1 rank) /
 mean t(each of the two at once), and the 2-rank cell says what share of that cap it reached.
@@ -91,6 +92,16 @@ def _stage_rows(path, n):
     return rows
 
 
+def implied(r, r1):
+    """the speed-up over 1 rank that a run's busy and CPU shares imply with a core per rank and items that cost
+    the CPU they cost at 1 rank: n x busy share x on-core share / busy share at 1 rank (None without them).
+    On a host whose speed drifts between runs this reads the farm's own losses (idle ranks, serving threads)
+    where the wall-time ratio mostly reads the drift"""
+    if r1 is None or not np.isfinite(r.get("on_cpu", float("nan"))) or not r1["busy_fraction"] > 0:
+        return None
+    return r["ranks"] * r["busy_fraction"] * r["on_cpu"] / r1["busy_fraction"]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", help="folder with run_np<N>.h5")
@@ -146,6 +157,9 @@ def main(argv=None):
                     serial += f", computing on a core {r['on_cpu']:.0%} of busy"
                 if n > 1 and np.isfinite(r["serve_cpu"]):
                     serial += f", serving {r['serve_cpu']:.1%} of a core"
+                imp = implied(r, wall.get((1, st)))
+                if n == 2 and imp is not None:
+                    serial += f"; implied ×{imp:.2f}"
                 cells.append(f"{r['wall_s']:.1f} s{speed}, busy {r['busy_fraction']:.0%} (per rank "
                              f"{'/'.join(f'{b:.0%}' for b in r['rank_busy'])}), imbalance {r['imbalance']:.2f}{serial}")
             else:

@@ -97,6 +97,8 @@ class FigScalingTest(unittest.TestCase):
             md = open(os.path.join(d, "scaling.md")).read()
             agents = next(line for line in md.splitlines() if line.startswith("| agents"))
             self.assertIn("computing on a core 90% of busy, serving 3.0% of a core", agents)
+            # implied: 2 x (9 / 10) busy x 0.9 on a core / (9 / 10) busy at 1 rank = 1.80
+            self.assertIn("; implied ×1.80", agents)
             self.assertEqual(agents.count("computing on a core"), 1)  # not at 1 rank
 
     def test_without_both_concurrent_runs_there_is_no_cap_column(self):
