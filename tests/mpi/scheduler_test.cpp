@@ -180,6 +180,33 @@ TEST(Farm, WorkersShareTheWorkWhenItemsAreSlow) {
   for (int q = 1; q < size_of(); ++q) EXPECT_GT(per_rank[q], 0) << "worker " << q << " got no item";
 }
 
+// the farm's clock: the computing thread's CPU seconds inside compute() are positive for a rank that computed
+// busy items and never more than its wall seconds there (the CPU is read inside the wall interval); the
+// serving thread's CPU is counted at more than one rank and is 0 at one (the calling thread computes)
+TEST(Farm, ClockCountsComputeCpuWithinItsWallTime) {
+  const mpi::FarmClock before = mpi::farm_clock();
+  std::vector<std::string> items(rank_of() == 0 ? 16 : 0, mpi::pack(int64_t{1}));
+  const mpi::FarmResult r = mpi::farm(MPI_COMM_WORLD, items, [](const std::string&) {
+    volatile double s = 0;
+    for (int k = 0; k < 2000000; ++k) s = s + 1e-9 * k;  // a few ms of CPU
+    return mpi::pack(static_cast<int64_t>(s > 0));
+  });
+  const mpi::FarmClock& after = mpi::farm_clock();
+  const double wall = after.compute_s - before.compute_s, cpu = after.compute_cpu_s - before.compute_cpu_s;
+  const double serve = after.serve_cpu_s - before.serve_cpu_s;
+  int computed = 0;
+  for (int o : r.owner) computed += o == rank_of();
+  if (rank_of() == 0) computed = static_cast<int>(after.items - before.items);
+  if (computed > 0) {
+    EXPECT_GT(cpu, 0.0);
+  }
+  EXPECT_LE(cpu, wall);
+  EXPECT_GE(serve, 0.0);
+  if (size_of() == 1) {
+    EXPECT_EQ(serve, 0.0);
+  }
+}
+
 TEST(ParallelHdf5, EachRankWritesItsRowsOfOneDataset) {
   std::string path = (std::filesystem::temp_directory_path() / "divcoll_rows_XXXXXX").string();
   if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/rows.h5";
