@@ -421,11 +421,10 @@ int run_session(const RunArgs& args) {
           }
           return text;
         };
-        std::vector<double> busy_all(size);
-        double busy_sum = 0, busy_max = 0;
+        double busy_sum = 0, busy_max = 0, cpu_sum = 0, serve_sum = 0;
         for (int r = 0; r < size; ++r) {
-          const double b = busy_all[r] = all[3 * static_cast<size_t>(r)];
-          busy_sum += b, busy_max = std::max(busy_max, b);
+          const double* c = &all[3 * static_cast<size_t>(r)];
+          busy_sum += c[0], busy_max = std::max(busy_max, c[0]), cpu_sum += c[1], serve_sum += c[2];
         }
         io::h5::Node g = file.group(name);
         g.write_double("wall_s_last_session", wall);
@@ -447,19 +446,16 @@ int run_session(const RunArgs& args) {
         g.write_string("master_serial_s_last_session", serial_text);
         if (rank == 0) {  // run_with_status has marked the stage complete
           std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
-                      name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * busy_all[0] / wall,
+                      name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * all[0] / wall,
                       busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
           std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
                       "commits %.2f s)\n",
                       name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
                       serial[0], serial[1], serial[2], serial[3]);
-          if (size > 1 && busy_sum > 0 && wall > 0) {
-            double cpu_sum = 0, serve_sum = 0;
-            for (int r = 0; r < size; ++r) cpu_sum += all[3 * static_cast<size_t>(r) + 1], serve_sum += all[3 * static_cast<size_t>(r) + 2];
+          if (size > 1 && busy_sum > 0 && wall > 0)
             std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
                         "core each\n",
                         name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
-          }
         }
       }
     } catch (const StopRequested& stop) {

@@ -32,9 +32,10 @@ double thread_cpu_s() {
 // how long a thread with nothing to do sleeps before it looks again: 20 µs after something happened,
 // doubling up to 2 ms, so a waiting rank costs its core under 1% and answers within 2 ms (a worker is
 // woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work).
-// A serving thread whose own computing thread has work, with no message of its own in flight, sleeps the
-// whole 2 ms at once instead (see `calm` in serve_master and serve_worker): each wake-up takes the core from
-// that computing thread, and the ramp from 20 µs after every message had cost it 2-3% of its time
+// A serving thread whose own computing thread has work, with no message of its own in flight, skips the ramp
+// and naps 2 ms (master) or 10 ms (worker) at once, woken when its item finishes (see `calm` in serve_master
+// and serve_worker): each wake-up takes the core from that computing thread, and the ramp from 20 µs after
+// every message had cost it 2-3% of its time
 class Backoff {
  public:
   static constexpr int kMinUs = 20, kMaxUs = 2000;

@@ -102,6 +102,18 @@ def implied(r, r1):
     return r["ranks"] * r["busy_fraction"] * r["on_cpu"] / r1["busy_fraction"]
 
 
+def cap_for_two(wall, conc, stages, st):
+    """the cap for 2 ranks of stage `st` (or "total": every stage of `stages`): 2 x t(1 rank) / mean t(two 1-rank
+    runs at once), from `wall` ({(ranks, stage): row}) and `conc` (read_concurrent); None without both"""
+    if st == "total":
+        if not stages or not all(s in conc and (1, s) in wall for s in stages):
+            return None
+        return 2 * sum(wall[(1, s)]["wall_s"] for s in stages) / sum(np.mean(conc[s]) for s in stages)
+    if st not in conc or (1, st) not in wall:
+        return None
+    return 2 * wall[(1, st)]["wall_s"] / np.mean(conc[st])
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", help="folder with run_np<N>.h5")
@@ -122,14 +134,7 @@ def main(argv=None):
     conc = read_concurrent(a.out) if 1 in ranks else {}
 
     def cap(st):
-        """2 x t(1 rank) / mean t(two 1-rank runs at once), or None"""
-        if st == "total":
-            if not all(s in conc and (1, s) in wall for s in stages):
-                return None
-            return 2 * sum(wall[(1, s)]["wall_s"] for s in stages) / sum(np.mean(conc[s]) for s in stages)
-        if st not in conc or (1, st) not in wall:
-            return None
-        return 2 * wall[(1, st)]["wall_s"] / np.mean(conc[st])
+        return cap_for_two(wall, conc, stages, st)
 
     md = ["| stage | " + " | ".join(f"{n} rank{'s' if n > 1 else ''}{' (oversubscribed)' if n > a.cores else ''}"
                                      for n in ranks) +
@@ -138,20 +143,17 @@ def main(argv=None):
     for st in stages + ["total"]:
         cells = []
         for n in ranks:
-            of_cap = ""
-            if n == 2 and ranks[0] == 1 and cap(st) is not None:
-                w2 = (sum(wall[(2, s)]["wall_s"] for s in stages if (2, s) in wall) if st == "total" else
-                      wall[(2, st)]["wall_s"] if (2, st) in wall else None)
-                w1 = (sum(wall[(1, s)]["wall_s"] for s in stages) if st == "total" else wall[(1, st)]["wall_s"])
-                if w2:
-                    of_cap = f", {w1 / w2 / cap(st):.0%} of the cap"
+            def of_cap(ratio):  # ", X% of the cap" after the 2-rank ratio over 1 rank, where there is a cap
+                c = cap(st) if n == 2 and ranks[0] == 1 else None
+                return f", {ratio / c:.0%} of the cap" if c is not None else ""
             if st == "total":
                 w = sum(wall[(n, s)]["wall_s"] for s in stages if (n, s) in wall)
                 base = sum(wall[(ranks[0], s)]["wall_s"] for s in stages if (ranks[0], s) in wall)
-                cells.append(f"**{w:.1f} s** (×{base / w:.2f}{of_cap})")
+                cells.append(f"**{w:.1f} s** (×{base / w:.2f}{of_cap(base / w)})")
             elif (n, st) in wall:
                 r = wall[(n, st)]
-                speed = f" (×{wall[(ranks[0], st)]['wall_s'] / r['wall_s']:.2f}{of_cap})" if (ranks[0], st) in wall and n != ranks[0] else ""
+                ratio = wall[(ranks[0], st)]["wall_s"] / r["wall_s"] if (ranks[0], st) in wall else None
+                speed = f" (×{ratio:.2f}{of_cap(ratio)})" if ratio is not None and n != ranks[0] else ""
                 serial = f", serial {r['serial_s']:.2f} s" if np.isfinite(r["serial_s"]) else ""
                 if n > 1 and np.isfinite(r["on_cpu"]):
                     serial += f", computing on a core {r['on_cpu']:.0%} of busy"

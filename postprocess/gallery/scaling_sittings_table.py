@@ -8,8 +8,6 @@ CPU counters the speed-up their busy and on-core shares imply (postprocess/fig_s
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import fig_scaling as F  # noqa: E402
 
@@ -32,18 +30,12 @@ def main(dirs):
         cells = []
         for rows, conc in data:
             stages = [s for s in F.STAGES if s in conc]
-            if st == "total":
-                w1 = sum(rows[(1, s)]["wall_s"] for s in stages)
-                w2 = sum(rows[(2, s)]["wall_s"] for s in stages)
-                cap = 2 * w1 / sum(np.mean(conc[s]) for s in stages)
-                imp = None
-            elif st in conc:
-                w1, w2 = rows[(1, st)]["wall_s"], rows[(2, st)]["wall_s"]
-                cap = 2 * w1 / np.mean(conc[st])
-                imp = F.implied(rows[(2, st)], rows[(1, st)])
-            else:
+            if st != "total" and st not in conc:
                 cells.append("—")
                 continue
+            cap = F.cap_for_two(rows, conc, stages, st)
+            w1, w2 = (sum(rows[(n, s)]["wall_s"] for s in ([st] if st != "total" else stages)) for n in (1, 2))
+            imp = F.implied(rows[(2, st)], rows[(1, st)]) if st != "total" else None
             cells.append(f"×{w1 / w2:.2f} of cap ×{cap:.2f} ({w1 / w2 / cap:.0%})" +
                          (f", implied ×{imp:.2f}" if imp is not None else ""))
         print(f"| {st} | " + " | ".join(cells) + " |")

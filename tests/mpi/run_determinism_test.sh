@@ -68,8 +68,8 @@ for trial in 1 2 3; do
     killed_complete=0
     h5dump -a /end_time "$W/k.h5" > /dev/null 2>&1 && killed_complete=1
     [ "$killed_complete" = 0 ] && break
-    [ "$attempt" -lt 4 ] && echo "trial $trial: the freeze landed after the run's end; again, aiming at line $(( (L + 1) / 2 ))"
     L=$(( (L + 1) / 2 ))
+    [ "$attempt" -lt 4 ] && echo "trial $trial: the freeze landed after the run's end; again, aiming at line $L"
   done
   echo "trial $trial: killed"
   # resume with another rank count (1 after the first kill, 3 after the second, 2 after the third)
