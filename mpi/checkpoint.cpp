@@ -54,7 +54,17 @@ int bcast_int(MPI_Comm comm, int v) {
   return v;
 }
 
+DeferredWrites* g_deferred = nullptr;
+
 }  // namespace
+
+DeferredWrites::DeferredWrites(std::function<void()> flush, std::function<bool()> urgent)
+    : flush_(std::move(flush)), urgent_(std::move(urgent)) {
+  DIVCOLL_DEMAND(g_deferred == nullptr);
+  g_deferred = this;
+}
+
+DeferredWrites::~DeferredWrites() { g_deferred = nullptr; }
 
 void checkpoint(MPI_Comm comm, io::h5::File& file, const std::string& run_path) {
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
@@ -93,11 +103,13 @@ void Checkpointer::at(bool force) {
   // one collective decides for every rank: any rank's stop request, and rank 0's clock
   int v[2] = {stop_signal(), 0};
   if (rank == 0)
-    v[1] = force || interval_s_ <= 0 || std::chrono::duration<double>(Clock::now() - last_).count() >= interval_s_;
+    v[1] = force || interval_s_ <= 0 || std::chrono::duration<double>(Clock::now() - last_).count() >= interval_s_ ||
+           (g_deferred && g_deferred->urgent_());
   MPI_Request req;
   MPI_Iallreduce(MPI_IN_PLACE, v, 2, MPI_INT, MPI_MAX, comm_, &req);
   wait_sleeping(req);
   if (v[0] != 0 || v[1] != 0) {
+    if (g_deferred) g_deferred->flush_();
     const auto t0 = Clock::now();
     checkpoint(comm_, file_, path_);
     last_ = Clock::now();

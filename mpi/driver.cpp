@@ -1,6 +1,8 @@
 #include "mpi/driver.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -10,6 +12,7 @@
 #include <boost/serialization/utility.hpp>
 
 #include "common/check.hpp"
+#include "mpi/checkpoint.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
 
@@ -32,12 +35,16 @@ std::string bcast_string(MPI_Comm comm, const std::string& s) { return broadcast
 // DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<done> (or <group>@<counter>:<done>, where plans share a group):
 // every rank flushes the file and exits between the state and the counter of that commit (a kill placed by
 // the program itself, for tests/mpi/commit_kill_test.sh)
+bool debug_exit_wanted(const std::string& group, const std::string& counter, int done) {
+  const char* e = std::getenv("DIVCOLL_DEBUG_EXIT_IN_COMMIT");
+  if (!e) return false;
+  const std::string want = std::string(e), at = std::to_string(done);
+  return want == group + ':' + at || want == group + '@' + counter + ':' + at;
+}
+
 void debug_exit_in_commit(MPI_Comm comm, const io::h5::File& file, const std::string& group, const std::string& counter,
                           int done) {
-  const char* e = std::getenv("DIVCOLL_DEBUG_EXIT_IN_COMMIT");
-  if (!e) return;
-  const std::string want = std::string(e), at = std::to_string(done);
-  if (want != group + ':' + at && want != group + '@' + counter + ':' + at) return;
+  if (!debug_exit_wanted(group, counter, done)) return;
   H5Fflush(file.id(), H5F_SCOPE_GLOBAL);
   MPI_Barrier(comm);
   int rank = 0;
@@ -52,6 +59,44 @@ double since(std::chrono::steady_clock::time_point t) {
 }
 
 }  // namespace
+
+void RecordQueue::add(Records records) {
+  for (Record& r : records) {
+    const size_t size = std::visit([](const auto& v) { return v.size() * sizeof(v[0]); }, r.values);
+    bytes_ += size;
+    auto it = index_.find(r.path);
+    if (it == index_.end()) {
+      index_.emplace(r.path, waiting_.size());
+      waiting_.push_back(std::move(r));
+      continue;
+    }
+    Record& w = waiting_[it->second];
+    DIVCOLL_DEMAND(w.dims == r.dims && w.values.index() == r.values.index());
+    std::visit(
+        [&](auto& into) {
+          const auto& from = std::get<std::decay_t<decltype(into)>>(r.values);
+          const size_t width = r.rows.empty() ? 0 : from.size() / r.rows.size();
+          for (size_t k = 0; k < r.rows.size(); ++k) {
+            const auto at = std::find(w.rows.begin(), w.rows.end(), r.rows[k]);
+            if (at != w.rows.end()) {
+              std::copy_n(from.begin() + k * width, width, into.begin() + (at - w.rows.begin()) * width);
+            } else {
+              w.rows.push_back(r.rows[k]);
+              into.insert(into.end(), from.begin() + k * width, from.begin() + (k + 1) * width);
+            }
+          }
+        },
+        w.values);
+  }
+}
+
+Records RecordQueue::take() {
+  Records out = std::move(waiting_);
+  waiting_.clear();
+  index_.clear();
+  bytes_ = 0;
+  return out;
+}
 
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records) {
   int rank = 0;
@@ -136,13 +181,35 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     else if (done > 0)
       std::printf("%s: resuming after %s %d\n", label.c_str(), info.round_word.c_str(), done);
   }
-  auto commit = [&](int rounds_done) {
+  // A round's rows and the state of its commit wait on the master until a commit copies the run file to its
+  // checkpoint (or the drive ends): --resume only ever starts from a copy, so rows and state written between
+  // copies were never used, and writing them every round made the workers wait for each write. Rows of one
+  // dataset from many rounds then go out in one write. With output.checkpoint_interval_s = 0 every commit
+  // copies, and every round is written at its commit as before.
+  RecordQueue deferred;
+  int pending_done = -1;  // the rounds done of the commit not yet written, -1: none
+  double records_s = 0;   // time in flush() writing rows (part of a commit's time)
+  auto flush = [&] {
+    const auto tr = std::chrono::steady_clock::now();
+    write_records(comm, file, rank == 0 ? deferred.take() : Records{});
+    records_s += since(tr);
+    const int done_now = broadcast(comm, pending_done);
+    if (done_now < 0) return;
     write_records(comm, file, rank == 0 ? plan.state() : Records{});
     using Counts = std::vector<std::pair<std::string, int64_t>>;
     for (const auto& [name, value] : broadcast(comm, rank == 0 ? plan.state_attributes() : Counts{}))
       write_attribute(file, info.group, name, value);
-    debug_exit_in_commit(comm, file, info.group, info.counter, rounds_done);
-    group.write_int(info.counter, rounds_done);
+    debug_exit_in_commit(comm, file, info.group, info.counter, done_now);
+    group.write_int(info.counter, done_now);
+    pending_done = -1;
+  };
+  // rank 0 asks for a copy (which writes what waits) once it holds more than this
+  constexpr size_t kDeferredMaxBytes = size_t{256} << 20;
+  DeferredWrites defer(flush, [&] { return deferred.bytes() > kDeferredMaxBytes; });
+  auto commit = [&](int rounds_done) {
+    pending_done = rounds_done;
+    // the debug exit sits between this commit's state and counter: they are written now, copy or not
+    if (debug_exit_wanted(info.group, info.counter, rounds_done)) flush();
     checkpoint();
   };
 
@@ -179,16 +246,23 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
       };
       farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
       tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
-      write_records(comm, file, rank == 0 ? plan.end_round(step) : Records{});
+      if (rank == 0) deferred.add(plan.end_round(step));
       lap(clock.writes_s);
     }
     ++clock.rounds;
-    if (r >= R) continue;  // the closing round: recorded, not counted
+    if (r >= R) {  // the closing round: recorded, not counted
+      const auto tc = std::chrono::steady_clock::now();
+      flush();
+      clock.writes_s += since(tc);
+      continue;
+    }
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
     if ((r + 1) % every == 0 || r + 1 == R) {
       const auto tc = std::chrono::steady_clock::now();
+      records_s = 0;
       commit(r + 1);
-      clock.commits_s += since(tc);
+      clock.writes_s += records_s;
+      clock.commits_s += since(tc) - records_s;
     }
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
@@ -196,6 +270,13 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
                   plan.summary(r).c_str(), n_items / dt, info.item_word.c_str(), el, (R - r - 1) * dt);
       std::fflush(stdout);
     }
+  }
+  {  // what still waits is written before the stage goes on (its later steps and stages read it)
+    const auto tc = std::chrono::steady_clock::now();
+    records_s = 0;
+    flush();
+    clock.writes_s += records_s;
+    clock.commits_s += since(tc) - records_s;
   }
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
   if (rank == 0) {

@@ -7,6 +7,9 @@
 // Commit: the plan's state and the counter are written together and then checkpointed (mpi/checkpoint.hpp),
 // one step; --resume starts from the last checkpoint, never from what a killed job left in the run file
 // after it, so a kill between the state and the counter (or anywhere else) resumes a consistent pair.
+// Since only a checkpoint is resumed from, the rounds' rows and the state wait on the master until a commit
+// that copies the run file (output.checkpoint_interval_s), and the end of the plan: then they are written,
+// a dataset's rows from many rounds in one write, so the workers do not wait for a write every round.
 // The hidden debug hook DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<rounds done> (or <group>@<counter>:<rounds done>,
 // where plans share a group) makes every rank flush the run
 // file and exit (code 86) right between writing that commit's state and its counter (tests/mpi/commit_kill_test.sh).
@@ -16,6 +19,7 @@
 
 #include <array>
 #include <functional>
+#include <map>
 #include <string>
 
 #include "io/config.hpp"
@@ -51,6 +55,20 @@ bool run_with_status(io::h5::File& file, const std::string& group, const std::fu
                      const std::function<void()>& body);
 // whether `group`'s status is "complete" (every rank reads)
 bool complete(const io::h5::Node& file, const std::string& group);
+
+// records waiting to be written (the driver's rounds between copies): one record per dataset, its rows in the
+// order they came, a row that comes again replacing its values
+class RecordQueue {
+ public:
+  void add(Records records);
+  Records take();                            // everything waiting, in the order the datasets came; empties
+  size_t bytes() const { return bytes_; }   // the values added since the last take()
+
+ private:
+  Records waiting_;
+  std::map<std::string, size_t> index_;
+  size_t bytes_ = 0;
+};
 
 // writes the master's records; every rank calls it (the others' `records` are ignored)
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -13,6 +14,10 @@
 #include <mutex>
 #include <thread>
 
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
+
 #include "mpi/protocol.hpp"
 #include "mpi/wait.hpp"
 
@@ -22,6 +27,39 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// DIVCOLL_FARM_TRACE=PREFIX: every rank appends its farm's events to PREFIX.RANK when a farm() returns, one
+// "KIND T A B" line each, T on the machine's monotonic clock (s): F farm() entered (A: items), C an item
+// computed (T its end, A its start), E farm() left; the master's G (a block handed out, A its first item) and
+// R (a result taken in); a worker's S (its result sent, A its first item) and T (a block received).
+// postprocess/farm_trace.py tells where the time went. Off (one clock read per item) without the variable
+struct Trace {
+  std::mutex mu;
+  std::vector<std::string> lines;
+  bool on = std::getenv("DIVCOLL_FARM_TRACE") != nullptr;
+  static double now() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
+  void add(char kind, double t, double a, double b) {
+    if (!on) return;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%c %.6f %.6f %.6f", kind, t, a, b);
+    std::lock_guard lk(mu);
+    lines.emplace_back(buf);
+  }
+  void flush(int rank) {
+    if (!on) return;
+    std::lock_guard lk(mu);
+    const std::string path = std::string(std::getenv("DIVCOLL_FARM_TRACE")) + "." + std::to_string(rank);
+    if (FILE* f = std::fopen(path.c_str(), "a")) {
+      for (const auto& l : lines) std::fprintf(f, "%s\n", l.c_str());
+      std::fclose(f);
+    }
+    lines.clear();
+  }
+};
+Trace& trace() {
+  static Trace t;
+  return t;
+}
 
 double thread_cpu_s() {
   timespec ts{};
@@ -202,6 +240,25 @@ bool node_has_core_per_rank(int size) {
   return cores == 0 || local <= static_cast<int>(cores);
 }
 
+// how long a rank with a core of its own and nothing to compute looks again without sleeping: a worker for
+// its next block, any rank in a collective's wait between rounds
+constexpr double kSpinS = 0.005;
+
+// whether every rank on this node has a core of its own (set by the first farm(); until then, no)
+bool g_own_core = false;
+
+// the calling thread's sleeps end when asked, not up to 50 µs later (Linux's default timer slack for a
+// normal thread), and whether ranks have cores of their own is known from then on
+void precise_naps(int size) {
+  static thread_local bool done = false;
+  if (done) return;
+  done = true;
+  g_own_core = node_has_core_per_rank(size);
+#ifdef __linux__
+  prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
+#endif
+}
+
 // the thread that computes items on one rank, and what it shares with the serving thread
 struct Shared {
   std::mutex mu;
@@ -218,7 +275,9 @@ std::string timed_compute(const std::function<std::string(const std::string&)>& 
                           double& seconds, double& cpu_seconds) {
   const auto t0 = Clock::now();
   const double c0 = thread_cpu_s();
+  const double tt = Trace::now();
   std::string r = compute(task);
+  trace().add('C', Trace::now(), tt, 0);
   cpu_seconds += thread_cpu_s() - c0;
   seconds += seconds_since(t0);
   return r;
@@ -264,6 +323,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       std::string buf = pack_block(first, items.data() + first, count);
       clock.task_bytes += static_cast<double>(buf.size());
       ++clock.task_msgs;
+      trace().add('G', Trace::now(), static_cast<double>(first), 0);
       sender.send(w, kTask, std::move(buf));
     } else if (!ended[w]) {
       ended[w] = 1;
@@ -344,6 +404,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       if (!flag) break;
       active = true;
       const auto t0 = Clock::now();
+      trace().add('R', Trace::now(), 0, 0);
       receiver.receive(msg, st);
       clock.result_s += seconds_since(t0);
       --held[st.MPI_SOURCE];
@@ -407,7 +468,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
 }
 
 void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute, FarmResult& out,
-                  FarmClock& clock) {
+                  FarmClock& clock, bool own_core) {
   struct Block {
     int64_t first = 0;
     std::vector<std::string> data;  // tasks, then their results
@@ -462,6 +523,8 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
   Receiver receiver;
   bool got_end = false;
   Backoff backoff;
+  Clock::time_point idle_since{};
+  bool was_idle = false;
   for (;;) {
     bool active = false;
     for (;;) {  // tasks (matched in the order the master sent them; nothing follows kRoundEnd)
@@ -471,6 +534,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
       MPI_Improbe(0, MPI_ANY_TAG, comm, &flag, &msg, &st);
       if (!flag) break;
       active = true;
+      trace().add('T', Trace::now(), 0, 0);
       receiver.receive(msg, st);
     }
     for (const auto& m : receiver.take()) {
@@ -498,6 +562,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
     if (error) std::rethrow_exception(error);
     for (Block& b : ready) {  // results go out at once, without waiting for the master to take them
       active = true;
+      trace().add('S', Trace::now(), static_cast<double>(b.first), 0);
       sender.send(0, kResult, pack_block(b.first, b.data.data(), static_cast<int64_t>(b.data.size())));
       for (size_t k = 0; k < b.data.size(); ++k) out.results[b.first + k] = std::move(b.data[k]);
     }
@@ -506,6 +571,13 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
     // calm: the computing thread has a block, and nothing of ours is in flight: its finished block wakes
     // us, and the master's next block can wait until then (we look every 10 ms all the same)
     const bool calm = !idle && sender.empty() && receiver.empty();
+    // waiting for the next block with a core of our own and nothing to compute: look again at once, for a
+    // while (in a round's tail the master answers a result within about 0.5 ms; sleeping between looks
+    // added as much again to every item of the tail)
+    if (idle && !was_idle) idle_since = Clock::now();
+    was_idle = idle;
+    const bool spin = own_core && idle && !got_end && seconds_since(idle_since) < kSpinS;
+    if (spin) continue;
     if (active && !calm) {
       backoff.reset();
     } else {
@@ -529,9 +601,13 @@ constexpr int kWaitMaxUs = 500;
 
 void wait_sleeping(MPI_Request& req) {
   Backoff b;
+  const auto t0 = Clock::now();
   for (int done = 0;;) {
     MPI_Test(&req, &done, MPI_STATUS_IGNORE);
     if (done) return;
+    // with a core of its own a rank looks again at once for a while: between rounds the others come within
+    // a few hundred µs, and a sleep overshoots that
+    if (g_own_core && seconds_since(t0) < kSpinS) continue;
     b.sleep(kWaitMaxUs);
   }
 }
@@ -562,6 +638,14 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   MPI_Comm_size(comm, &size);
   const double cpu0 = thread_cpu_s();
   int64_t n = static_cast<int64_t>(items.size());
+  trace().add('F', Trace::now(), static_cast<double>(n), 0);
+  struct TraceEnd {
+    int rank;
+    ~TraceEnd() {
+      trace().add('E', Trace::now(), 0, 0);
+      trace().flush(rank);
+    }
+  } trace_end{rank};
   FarmResult out;
   if (size == 1) {
     out.results.resize(n);
@@ -575,6 +659,7 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
     clock.farm_s += seconds_since(t_farm);
     return out;
   }
+  precise_naps(size);
   {  // workers wait here while the master prepares the round: sleeping, not spinning in MPI_Bcast
     MPI_Request req;
     MPI_Ibcast(&n, 1, MPI_INT64_T, 0, comm, &req);
@@ -583,7 +668,7 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   out.results.assign(n, std::string());
   out.owner.assign(n, 0);
   if (rank == 0) serve_master(comm, size, n, items, compute, opt, out, clock);
-  else serve_worker(comm, compute, out, clock);
+  else serve_worker(comm, compute, out, clock, g_own_core);
   if (n > 0) {
     MPI_Request req;
     MPI_Ibcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm, &req);

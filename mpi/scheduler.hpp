@@ -6,7 +6,10 @@
 // MPI_Imrecv), so nobody waits for a rank that is busy computing. The master computes items too when its
 // node has a core per rank; with one rank it computes everything. Results are placed by item index, so
 // they do not depend on who computed what, nor on the block sizes. A rank that waits sleeps (backing off
-// up to 2 ms) instead of spinning in MPI, so an oversubscribed rank leaves its core to the ranks that compute.
+// up to 2 ms) instead of spinning in MPI, so an oversubscribed rank leaves its core to the ranks that compute;
+// with a core per rank, a rank with nothing to compute looks again at once for up to 5 ms (a worker awaiting
+// its next block, any rank in a wait between rounds), since that core has nothing else to do.
+// DIVCOLL_FARM_TRACE=PREFIX writes every rank's farm events to PREFIX.RANK (postprocess/farm_trace.py).
 #pragma once
 
 #include <mpi.h>

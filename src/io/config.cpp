@@ -310,8 +310,8 @@ const std::vector<Key>& schema() {
         text("output", "dir", "\"runs\"", "directory of run files and checkpoints",
              DIVCOLL_FIELD(output.dir)),
         num("output", "checkpoint_every", T::Int, "1", "[1, 1e6]", "",
-            "generations (or iterations) between commits of a stage's state to the run file (a stop on a signal "
-            "waits for the next one)", DIVCOLL_FIELD(output.checkpoint_every)),
+            "generations (or iterations) between commits of a stage's state, where a copy to the checkpoint may "
+            "be made (a stop on a signal waits for the next one)", DIVCOLL_FIELD(output.checkpoint_every)),
         num("output", "checkpoint_interval_s", T::Double, "30.0", "[0, 86400]", "s",
             "least wall time between copies of the run file to its checkpoint RUN.h5.ckpt, which --resume "
             "continues from (a copy and its read-back cost the file's size twice while every rank waits); a "

@@ -1,0 +1,104 @@
+// the driver's deferred rows (mpi/driver.hpp): what waits between copies is merged per dataset, and a plan's
+// every row, its state and its counter are in the run file when drive() returns, at 1 to 4 ranks
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <filesystem>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "io/config.hpp"
+#include "io/h5.hpp"
+#include "mpi/driver.hpp"
+#include "mpi/protocol.hpp"
+
+namespace divcoll {
+namespace {
+
+int rank_of() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+
+TEST(RecordQueue, MergesRowsPerDatasetAndTheLastValueOfARowWins) {
+  mpi::RecordQueue q;
+  q.add({{"a", {4, 2}, {0}, std::vector<double>{1, 2}}, {"b", {3}, {1}, std::vector<int32_t>{7}}});
+  q.add({{"a", {4, 2}, {2, 0}, std::vector<double>{5, 6, 3, 4}}});
+  EXPECT_EQ(q.bytes(), 2 * sizeof(double) + sizeof(int32_t) + 4 * sizeof(double));
+  const mpi::Records r = q.take();
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0].path, "a");
+  EXPECT_EQ(r[0].rows, (std::vector<int64_t>{0, 2}));
+  EXPECT_EQ(std::get<std::vector<double>>(r[0].values), (std::vector<double>{3, 4, 5, 6}));
+  EXPECT_EQ(r[1].path, "b");
+  EXPECT_EQ(std::get<std::vector<int32_t>>(r[1].values), (std::vector<int32_t>{7}));
+  EXPECT_EQ(q.bytes(), 0u);
+  EXPECT_TRUE(q.take().empty());
+}
+
+// R rounds of 3 items (item i of round r computes 10 r + i); each round records row r of "toy/sums" (its
+// results' sum) and rewrites row 0 of "toy/last" (the round's index); the state is the running total
+class ToyPlan final : public mpi::Plan {
+ public:
+  explicit ToyPlan(int rounds) : R_(rounds) {}
+  Info info() const override { return {"toy", "toy", "rounds_done", "round", "items"}; }
+  int rounds() const override { return R_; }
+  std::vector<std::string> state_paths() const override { return {"toy/total"}; }
+  void start(int, const mpi::StoredState&) override { total_ = 0; }
+  mpi::Records state() const override { return {{"toy/total", {1}, {0}, std::vector<double>{total_}}}; }
+  std::vector<std::string> items(int r) override {
+    sum_ = 0;
+    return {mpi::pack(10 * r), mpi::pack(10 * r + 1), mpi::pack(10 * r + 2)};
+  }
+  std::string compute(const std::string& b) override { return b; }
+  void reduce(int, int64_t, const std::string& b) override { sum_ += mpi::unpack<int>(b); }
+  mpi::Records end_round(int r) override {
+    total_ += sum_;
+    return {{"toy/sums", {static_cast<uint64_t>(R_), 1}, {r}, std::vector<double>{static_cast<double>(sum_)}},
+            {"toy/last", {1}, {0}, std::vector<int64_t>{r}}};
+  }
+
+ private:
+  int R_;
+  int sum_ = 0;
+  double total_ = 0;
+};
+
+TEST(Drive, EveryRowStateAndCounterAreWrittenByTheEndWhenNoCommitCopies) {
+  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
+  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/toy.h5";
+  path = mpi::broadcast(MPI_COMM_WORLD, path);
+  const int R = 5;
+  int commits = 0;
+  {
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    io::h5::File f = io::h5::File::create(path, true, fapl.id());
+    io::RunConfig cfg = io::default_config();
+    cfg.run.progress_every_s = 0;
+    cfg.output.checkpoint_every = 2;  // commits after rounds 2, 4 and 5 (the last)
+    ToyPlan plan(R);
+    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [&] { ++commits; });  // no Checkpointer: nothing copies
+    f.close();
+  }
+  EXPECT_EQ(commits, 3);
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank_of() == 0) {
+    io::h5::File f = io::h5::File::open(path);
+    const std::vector<double> sums = f.read<double>("toy/sums", io::h5::Dims{R, 1});
+    double total = 0;
+    for (int r = 0; r < R; ++r) {
+      EXPECT_EQ(sums[r], 30.0 * r + 3) << "round " << r;
+      total += sums[r];
+    }
+    EXPECT_EQ(f.read<int64_t>("toy/last", io::h5::Dims{1})[0], R - 1);
+    EXPECT_EQ(f.read<double>("toy/total", io::h5::Dims{1})[0], total);
+    EXPECT_EQ(f.group("toy").read_int("rounds_done"), R);
+    std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+  }
+}
+
+}  // namespace
+}  // namespace divcoll
