@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 
 #include "analysis/behaviour.hpp"
 #include "analysis/dtw.hpp"
@@ -367,7 +368,9 @@ class FamiliarityPlan final : public Plan {
         R_(cfg.connectors.replicates),
         e_flat_(static_cast<int>(std::find(envs_.begin(), envs_.end(), "flat") - envs_.begin())) {}
   Info info() const override {
-    return {"analysis familiarity", "analysis", "familiarity_envs_done", "environment", "fits", 1};
+    Info i{"analysis familiarity", "analysis", "familiarity_envs_done", "environment", "fits", 1};
+    i.independent_rounds = true;  // an environment's fits read only their task and the hidden states
+    return i;
   }
   int rounds() const override { return EN_; }
   std::vector<std::string> state_paths() const override {
@@ -392,7 +395,7 @@ class FamiliarityPlan final : public Plan {
     std::vector<std::string> items;
     for (int32_t t = 0; t < 2; ++t)
       for (int32_t r = 0; r < R_; ++r) items.push_back(pack(FitTask{k, t, r}));
-    done_.assign(items.size(), {});
+    done_[k].assign(items.size(), {});
     return items;
   }
   std::string compute(const std::string& bytes) override {
@@ -429,10 +432,11 @@ class FamiliarityPlan final : public Plan {
     return pack(d);
   }
   void reduce(int k, int64_t i, const std::string& bytes) override {
-    done_[i] = unpack<FitDone>(bytes);
+    FitDone& d = done_[k][i];
+    d = unpack<FitDone>(bytes);
     const size_t row = static_cast<size_t>(k) * R_ + i % R_;  // item i is type i / R, replicate i % R
-    ns_[i / R_][2 * row] = done_[i].n_train;
-    ns_[i / R_][2 * row + 1] = done_[i].n_novel;
+    ns_[i / R_][2 * row] = d.n_train;
+    ns_[i / R_][2 * row + 1] = d.n_novel;
   }
   Records end_round(int k) override {
     const hsize_t hEN = EN_, hR = R_, hS = 2 * static_cast<hsize_t>(A_.max_states);
@@ -441,7 +445,7 @@ class FamiliarityPlan final : public Plan {
       std::vector<int64_t> counts;
       std::vector<float> emb;
       for (int r = 0; r < R_; ++r) {
-        const FitDone& d = done_[static_cast<size_t>(t) * R_ + r];
+        const FitDone& d = done_[k][static_cast<size_t>(t) * R_ + r];
         counts.insert(counts.end(), d.counts.begin(), d.counts.end());
         std::vector<float> padded(2 * hS, std::numeric_limits<float>::quiet_NaN());
         std::copy(d.embedding.begin(), d.embedding.end(), padded.begin());
@@ -455,6 +459,7 @@ class FamiliarityPlan final : public Plan {
       out.push_back({g + "/n_states", {hEN, hR, 2}, {k}, ns});
       out.push_back({g + "/embedding", {hEN, hR, hS, 2}, {k}, std::move(emb)});
     }
+    done_.erase(k);
     return out;
   }
   std::string summary(int k) const override {
@@ -500,7 +505,7 @@ class FamiliarityPlan final : public Plan {
   const int K_;                                     // hidden states per episode
   const std::array<std::vector<float>, 2> hidden_;  // [type] deploy's hidden states
   const int EN_, NP_, R_, e_flat_;
-  std::vector<FitDone> done_;
+  std::map<int, std::vector<FitDone>> done_;  // [environment] its fits (several rounds are farmed together)
   std::array<std::vector<int64_t>, 2> counts_, ns_;  // [type] novel E × R × 6, × 2
 };
 

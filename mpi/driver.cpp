@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <map>
 #include <cstdio>
 #include <cstdlib>
@@ -217,59 +218,107 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   DriverClock& clock = driver_clock();
   double last_print = -1e9;
   const int end = R + (plan.closing_round() ? 1 : 0);
-  for (int r = done; r < end; ++r) {
+  // independent rounds are farmed together until a farm has this many items per rank (mpi/plan.hpp)
+  constexpr size_t kMinItemsPerRank = 8;
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
+  for (int r = done; r < end;) {
     const auto t0 = std::chrono::steady_clock::now();
+    // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
+    std::vector<std::string> items;
+    std::vector<int64_t> first = {0};  // where each step's items start in `items`
+    int m = 0;
+    auto tp = std::chrono::steady_clock::now();
+    auto lap = [&](double& into) {
+      const auto now = std::chrono::steady_clock::now();
+      into += std::chrono::duration<double>(now - tp).count();
+      tp = now;
+    };
+    const bool together = info.independent_rounds && r < R;
+    if (together) {
+      if (rank == 0)
+        do {
+          const std::string in = plan.round_input(r + m);
+          DIVCOLL_DEMAND(in.empty());
+          plan.take_input(r + m, in);
+          std::vector<std::string> more = plan.items(r + m);
+          std::move(more.begin(), more.end(), std::back_inserter(items));
+          first.push_back(static_cast<int64_t>(items.size()));
+          ++m;
+        } while (r + m < R && items.size() < kMinItemsPerRank * static_cast<size_t>(size) &&
+                 !debug_exit_wanted(info.group, info.counter, r + m));  // the debug exit's commit stays one
+      m = broadcast(comm, m);
+      if (rank != 0)
+        for (int k = 0; k < m; ++k) plan.take_input(r + k, std::string());
+      lap(clock.items_s);
+    } else {
+      m = 1;
+    }
     size_t n_items = 0;
     for (int pass = 0; pass < passes; ++pass) {
       const int step = r * passes + pass;
-      auto tp = std::chrono::steady_clock::now();
-      auto lap = [&](double& into) {
-        const auto now = std::chrono::steady_clock::now();
-        into += std::chrono::duration<double>(now - tp).count();
-        tp = now;
-      };
-      plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
-      lap(clock.input_s);
-      const std::vector<std::string> items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
-      lap(clock.items_s);
+      if (!together) {
+        plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
+        lap(clock.input_s);
+        items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
+        first = {0, static_cast<int64_t>(items.size())};
+        lap(clock.items_s);
+      }
       n_items += items.size();
       FarmOptions fo;
-      fo.on_result = [&](int64_t i, const std::string& bytes) { plan.reduce(step, i, bytes); };
+      size_t at = 0;  // the step of the latest result (results come in item order)
+      fo.on_result = [&](int64_t i, const std::string& bytes) {
+        while (i >= first[at + 1]) ++at;
+        plan.reduce(together ? r + static_cast<int>(at) : step, i - first[at], bytes);
+      };
       fo.progress = [&](int k, int n) {
         const double now = since(t_stage);
         if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
           last_print = now;
-          std::printf("%s: %s %d/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), r + 1, R, k, n,
-                      info.item_word.c_str(), now);
+          const std::string rounds = m > 1 ? std::to_string(r + 1) + "-" + std::to_string(r + m) : std::to_string(r + 1);
+          std::printf("%s: %s %s/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), rounds.c_str(), R, k,
+                      n, info.item_word.c_str(), now);
           std::fflush(stdout);
         }
       };
       farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
       tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
-      if (rank == 0) deferred.add(plan.end_round(step));
+      if (rank == 0) {
+        if (together)
+          for (int k = 0; k < m; ++k) deferred.add(plan.end_round(r + k));
+        else
+          deferred.add(plan.end_round(step));
+      }
       lap(clock.writes_s);
     }
-    ++clock.rounds;
+    clock.rounds += m;
     if (r >= R) {  // the closing round: recorded, not counted
       const auto tc = std::chrono::steady_clock::now();
       flush();
       clock.writes_s += since(tc);
+      ++r;
       continue;
     }
+    // a commit after the last round of this farm if a commit point (every `every` rounds, the last round) lies
+    // among its rounds: the state is the state after all of them
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
-    if ((r + 1) % every == 0 || r + 1 == R) {
+    if ((r + m) / every > r / every || r + m == R) {
       const auto tc = std::chrono::steady_clock::now();
       records_s = 0;
-      commit(r + 1);
+      commit(r + m);
       clock.writes_s += records_s;
       clock.commits_s += since(tc) - records_s;
     }
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
-      std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(), r + 1, R,
-                  plan.summary(r).c_str(), n_items / dt, info.item_word.c_str(), el, (R - r - 1) * dt);
+      for (int k = 0; k < m; ++k)
+        std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(),
+                    r + k + 1, R, plan.summary(r + k).c_str(), n_items / dt, info.item_word.c_str(), el,
+                    (R - r - m) * dt / m);
       std::fflush(stdout);
     }
+    r += m;
   }
   {  // what still waits is written before the stage goes on (its later steps and stages read it)
     const auto tc = std::chrono::steady_clock::now();

@@ -52,6 +52,12 @@ class Plan {
     // farm passes per round: a round of several passes (e.g. agents alone, then pairs that use their
     // results) is counted and committed as one. The methods marked (step) get step = round · passes + pass
     int passes = 1;
+    // rounds that need nothing from each other (no round input; compute() reads only its item): the driver
+    // farms several in one call when a round alone has few items per rank (its tail, where ranks wait for the
+    // last item, would be a large share), and commits after the last of them. Each is still reduced,
+    // recorded and counted as its own round, but items() of the later rounds comes before the earlier
+    // rounds' reduce() and end_round(), so the plan keeps a round's results by its step. Passes must be 1
+    bool independent_rounds = false;
   };
   virtual Info info() const = 0;
   virtual int rounds() const = 0;                       // counted rounds: 0 .. rounds()-1

@@ -1,9 +1,11 @@
-// the driver's deferred rows (mpi/driver.hpp): what waits between copies is merged per dataset, and a plan's
-// every row, its state and its counter are in the run file when drive() returns, at 1 to 4 ranks
+// the driver (mpi/driver.hpp): what waits between copies is merged per dataset, a plan's every row, its state
+// and its counter are in the run file when drive() returns, and independent rounds farmed together are each
+// reduced and recorded as their own; at 1 to 4 ranks
 #include <gtest/gtest.h>
 #include <mpi.h>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <variant>
 #include <vector>
@@ -96,6 +98,70 @@ TEST(Drive, EveryRowStateAndCounterAreWrittenByTheEndWhenNoCommitCopies) {
     EXPECT_EQ(f.read<int64_t>("toy/last", io::h5::Dims{1})[0], R - 1);
     EXPECT_EQ(f.read<double>("toy/total", io::h5::Dims{1})[0], total);
     EXPECT_EQ(f.group("toy").read_int("rounds_done"), R);
+    std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+  }
+}
+
+// R independent rounds of one item each (item of round r computes 100 + r); the driver farms several together,
+// yet each result must reach its own round, in order, and each round record its own row
+class IndependentPlan final : public mpi::Plan {
+ public:
+  explicit IndependentPlan(int rounds) : R_(rounds) {}
+  Info info() const override {
+    Info i{"independent", "ind", "rounds_done", "round", "items"};
+    i.independent_rounds = true;
+    return i;
+  }
+  int rounds() const override { return R_; }
+  void start(int, const mpi::StoredState&) override {}
+  std::vector<std::string> items(int r) override { return {mpi::pack(100 + r)}; }
+  std::string compute(const std::string& b) override { return b; }
+  void reduce(int r, int64_t i, const std::string& b) override {
+    EXPECT_EQ(i, 0);
+    EXPECT_EQ(mpi::unpack<int>(b), 100 + r);
+    value_[r] = mpi::unpack<int>(b);
+    reduced.push_back(r);
+  }
+  mpi::Records end_round(int r) override {
+    ended.push_back(r);
+    return {{"ind/values", {static_cast<uint64_t>(R_)}, {r}, std::vector<int64_t>{value_.at(r)}}};
+  }
+  std::vector<int> reduced, ended;
+
+ private:
+  int R_;
+  std::map<int, int64_t> value_;
+};
+
+TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) {
+  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
+  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/ind.h5";
+  path = mpi::broadcast(MPI_COMM_WORLD, path);
+  const int R = 37;  // one item per round: up to 8 per rank go into one farm
+  int commits = 0;
+  IndependentPlan plan(R);
+  {
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    io::h5::File f = io::h5::File::create(path, true, fapl.id());
+    io::RunConfig cfg = io::default_config();
+    cfg.run.progress_every_s = 0;
+    cfg.output.checkpoint_every = 1;
+    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [&] { ++commits; });
+    f.close();
+  }
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  EXPECT_EQ(commits, (R + 8 * size - 1) / (8 * size)) << "one commit per farm of 8 rounds per rank";
+  if (rank_of() == 0) {
+    std::vector<int> in_order(R);
+    for (int r = 0; r < R; ++r) in_order[r] = r;
+    EXPECT_EQ(plan.reduced, in_order);
+    EXPECT_EQ(plan.ended, in_order);
+    io::h5::File f = io::h5::File::open(path);
+    const std::vector<int64_t> v = f.read<int64_t>("ind/values", io::h5::Dims{R});
+    for (int r = 0; r < R; ++r) EXPECT_EQ(v[r], 100 + r);
+    EXPECT_EQ(f.group("ind").read_int("rounds_done"), R);
     std::filesystem::remove_all(std::filesystem::path(path).parent_path());
   }
 }
