@@ -224,6 +224,8 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   MPI_Comm_size(comm, &size);
   DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
   for (int r = done; r < end;) {
+    // the closing round changes the plan's state: a commit still waiting is written with its own state first
+    if (r >= R) flush();
     const auto t0 = std::chrono::steady_clock::now();
     // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
     std::vector<std::string> items;

@@ -102,6 +102,53 @@ TEST(Drive, EveryRowStateAndCounterAreWrittenByTheEndWhenNoCommitCopies) {
   }
 }
 
+// 3 counted rounds adding 1, 2, 3 to the state, and a closing round that adds 1000 to it: the state committed with
+// the last round (written at the end, since nothing copies) must be the state before the closing round
+class ClosingPlan final : public mpi::Plan {
+ public:
+  Info info() const override { return {"closing", "closing", "rounds_done", "round", "items"}; }
+  int rounds() const override { return 3; }
+  bool closing_round() const override { return true; }
+  std::vector<std::string> state_paths() const override { return {"closing/total"}; }
+  void start(int, const mpi::StoredState&) override { total_ = 0; }
+  mpi::Records state() const override { return {{"closing/total", {1}, {0}, std::vector<double>{total_}}}; }
+  std::vector<std::string> items(int r) override { return {mpi::pack(r)}; }
+  std::string compute(const std::string& b) override { return b; }
+  void reduce(int, int64_t, const std::string&) override {}
+  mpi::Records end_round(int r) override {
+    total_ += r < 3 ? r + 1 : 1000;
+    return {{"closing/rounds", {4}, {r}, std::vector<double>{total_}}};
+  }
+
+ private:
+  double total_ = 0;
+};
+
+TEST(Drive, TheClosingRoundDoesNotChangeTheCommittedState) {
+  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
+  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/closing.h5";
+  path = mpi::broadcast(MPI_COMM_WORLD, path);
+  {
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    io::h5::File f = io::h5::File::create(path, true, fapl.id());
+    io::RunConfig cfg = io::default_config();
+    cfg.run.progress_every_s = 0;
+    cfg.output.checkpoint_every = 1;
+    ClosingPlan plan;
+    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [] {});  // no copies: every commit waits for the end
+    f.close();
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank_of() == 0) {
+    io::h5::File f = io::h5::File::open(path);
+    EXPECT_EQ(f.read<double>("closing/total", io::h5::Dims{1})[0], 6.0);
+    EXPECT_EQ(f.read<double>("closing/rounds", io::h5::Dims{4}), (std::vector<double>{1, 3, 6, 1006}));
+    EXPECT_EQ(f.group("closing").read_int("rounds_done"), 3);
+    std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+  }
+}
+
 // R independent rounds of one item each (item of round r computes 100 + r); the driver farms several together,
 // yet each result must reach its own round, in order, and each round record its own row
 class IndependentPlan final : public mpi::Plan {
