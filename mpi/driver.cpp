@@ -189,7 +189,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   // copies, and every round is written at its commit as before.
   RecordQueue deferred;
   int pending_done = -1;  // the rounds done of the commit not yet written, -1: none
-  double records_s = 0;   // time in flush() writing rows (part of a commit's time)
+  double records_s = 0;   // time in flush() writing rows (reset by `timed` below)
   auto flush = [&] {
     const auto tr = std::chrono::steady_clock::now();
     write_records(comm, file, rank == 0 ? deferred.take() : Records{});
@@ -214,8 +214,17 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     checkpoint();
   };
 
-  const auto t_stage = std::chrono::steady_clock::now();
   DriverClock& clock = driver_clock();
+  // runs a flush or a commit (which may flush): the time writing rows counts as writes, the rest as commits
+  auto timed = [&](const auto& f) {
+    const auto tc = std::chrono::steady_clock::now();
+    records_s = 0;
+    f();
+    clock.writes_s += records_s;
+    clock.commits_s += since(tc) - records_s;
+  };
+
+  const auto t_stage = std::chrono::steady_clock::now();
   double last_print = -1e9;
   const int end = R + (plan.closing_round() ? 1 : 0);
   // independent rounds are farmed together until a farm has this many items per rank (mpi/plan.hpp)
@@ -225,7 +234,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
   for (int r = done; r < end;) {
     // the closing round changes the plan's state: a commit still waiting is written with its own state first
-    if (r >= R) flush();
+    if (r >= R) timed(flush);
     const auto t0 = std::chrono::steady_clock::now();
     // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
     std::vector<std::string> items;
@@ -296,22 +305,14 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     }
     clock.rounds += m;
     if (r >= R) {  // the closing round: recorded, not counted
-      const auto tc = std::chrono::steady_clock::now();
-      flush();
-      clock.writes_s += since(tc);
+      timed(flush);
       ++r;
       continue;
     }
     // a commit after the last round of this farm if a commit point (every `every` rounds, the last round) lies
     // among its rounds: the state is the state after all of them
     const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
-    if ((r + m) / every > r / every || r + m == R) {
-      const auto tc = std::chrono::steady_clock::now();
-      records_s = 0;
-      commit(r + m);
-      clock.writes_s += records_s;
-      clock.commits_s += since(tc) - records_s;
-    }
+    if ((r + m) / every > r / every || r + m == R) timed([&] { commit(r + m); });
     if (rank == 0) {
       const double dt = since(t0), el = since(t_stage);
       for (int k = 0; k < m; ++k)
@@ -322,13 +323,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     }
     r += m;
   }
-  {  // what still waits is written before the stage goes on (its later steps and stages read it)
-    const auto tc = std::chrono::steady_clock::now();
-    records_s = 0;
-    flush();
-    clock.writes_s += records_s;
-    clock.commits_s += since(tc) - records_s;
-  }
+  timed(flush);  // what still waits is written before the stage goes on (its later steps and stages read it)
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
   if (rank == 0) {
     const std::string s = plan.finish_summary();

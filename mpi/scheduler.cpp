@@ -32,16 +32,17 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // "KIND T A B" line each, T on the machine's monotonic clock (s): F farm() entered (A: items), C an item
 // computed (T its end, A its start), E farm() left; the master's G (a block handed out, A its first item) and
 // R (a result taken in); a worker's S (its result sent, A its first item) and T (a block received).
-// postprocess/farm_trace.py tells where the time went. Off (one clock read per item) without the variable
+// postprocess/farm_trace.py tells where the time went. Off (not even a clock read) without the variable
 struct Trace {
   std::mutex mu;
   std::vector<std::string> lines;
   bool on = std::getenv("DIVCOLL_FARM_TRACE") != nullptr;
   static double now() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
-  void add(char kind, double t, double a, double b) {
+  // an event now
+  void add(char kind, double a) {
     if (!on) return;
     char buf[96];
-    std::snprintf(buf, sizeof buf, "%c %.6f %.6f %.6f", kind, t, a, b);
+    std::snprintf(buf, sizeof buf, "%c %.6f %.6f 0", kind, now(), a);
     std::lock_guard lk(mu);
     lines.emplace_back(buf);
   }
@@ -275,9 +276,9 @@ std::string timed_compute(const std::function<std::string(const std::string&)>& 
                           double& seconds, double& cpu_seconds) {
   const auto t0 = Clock::now();
   const double c0 = thread_cpu_s();
-  const double tt = Trace::now();
+  const double start = trace().on ? Trace::now() : 0;
   std::string r = compute(task);
-  trace().add('C', Trace::now(), tt, 0);
+  trace().add('C', start);
   cpu_seconds += thread_cpu_s() - c0;
   seconds += seconds_since(t0);
   return r;
@@ -323,7 +324,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       std::string buf = pack_block(first, items.data() + first, count);
       clock.task_bytes += static_cast<double>(buf.size());
       ++clock.task_msgs;
-      trace().add('G', Trace::now(), static_cast<double>(first), 0);
+      trace().add('G', static_cast<double>(first));
       sender.send(w, kTask, std::move(buf));
     } else if (!ended[w]) {
       ended[w] = 1;
@@ -404,7 +405,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       if (!flag) break;
       active = true;
       const auto t0 = Clock::now();
-      trace().add('R', Trace::now(), 0, 0);
+      trace().add('R', 0);
       receiver.receive(msg, st);
       clock.result_s += seconds_since(t0);
       --held[st.MPI_SOURCE];
@@ -534,7 +535,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
       MPI_Improbe(0, MPI_ANY_TAG, comm, &flag, &msg, &st);
       if (!flag) break;
       active = true;
-      trace().add('T', Trace::now(), 0, 0);
+      trace().add('T', 0);
       receiver.receive(msg, st);
     }
     for (const auto& m : receiver.take()) {
@@ -562,7 +563,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
     if (error) std::rethrow_exception(error);
     for (Block& b : ready) {  // results go out at once, without waiting for the master to take them
       active = true;
-      trace().add('S', Trace::now(), static_cast<double>(b.first), 0);
+      trace().add('S', static_cast<double>(b.first));
       sender.send(0, kResult, pack_block(b.first, b.data.data(), static_cast<int64_t>(b.data.size())));
       for (size_t k = 0; k < b.data.size(); ++k) out.results[b.first + k] = std::move(b.data[k]);
     }
@@ -638,11 +639,11 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   MPI_Comm_size(comm, &size);
   const double cpu0 = thread_cpu_s();
   int64_t n = static_cast<int64_t>(items.size());
-  trace().add('F', Trace::now(), static_cast<double>(n), 0);
+  trace().add('F', static_cast<double>(n));
   struct TraceEnd {
     int rank;
     ~TraceEnd() {
-      trace().add('E', Trace::now(), 0, 0);
+      trace().add('E', 0);
       trace().flush(rank);
     }
   } trace_end{rank};

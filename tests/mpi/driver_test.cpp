@@ -5,6 +5,7 @@
 #include <mpi.h>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <variant>
@@ -22,6 +23,26 @@ int rank_of() {
   int r = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
   return r;
+}
+
+// drives `plan` (output.checkpoint_every = `every`, `checkpoint` at each commit) into a new file `name` in a new
+// temporary folder, on every rank; returns its path once every rank has closed it (the test removes the folder)
+std::string drive_into(const std::string& name, mpi::Plan& plan, int every, const std::function<void()>& checkpoint) {
+  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
+  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/" + name;
+  path = mpi::broadcast(MPI_COMM_WORLD, path);
+  {
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    io::h5::File f = io::h5::File::create(path, true, fapl.id());
+    io::RunConfig cfg = io::default_config();
+    cfg.run.progress_every_s = 0;
+    cfg.output.checkpoint_every = every;
+    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, checkpoint);
+    f.close();
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  return path;
 }
 
 TEST(RecordQueue, MergesRowsPerDatasetAndTheLastValueOfARowWins) {
@@ -69,24 +90,12 @@ class ToyPlan final : public mpi::Plan {
 };
 
 TEST(Drive, EveryRowStateAndCounterAreWrittenByTheEndWhenNoCommitCopies) {
-  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
-  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/toy.h5";
-  path = mpi::broadcast(MPI_COMM_WORLD, path);
   const int R = 5;
   int commits = 0;
-  {
-    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
-    io::h5::File f = io::h5::File::create(path, true, fapl.id());
-    io::RunConfig cfg = io::default_config();
-    cfg.run.progress_every_s = 0;
-    cfg.output.checkpoint_every = 2;  // commits after rounds 2, 4 and 5 (the last)
-    ToyPlan plan(R);
-    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [&] { ++commits; });  // no Checkpointer: nothing copies
-    f.close();
-  }
+  ToyPlan plan(R);
+  // commits after rounds 2, 4 and 5 (the last); no Checkpointer: nothing copies
+  const std::string path = drive_into("toy.h5", plan, 2, [&] { ++commits; });
   EXPECT_EQ(commits, 3);
-  MPI_Barrier(MPI_COMM_WORLD);
   if (rank_of() == 0) {
     io::h5::File f = io::h5::File::open(path);
     const std::vector<double> sums = f.read<double>("toy/sums", io::h5::Dims{R, 1});
@@ -125,21 +134,8 @@ class ClosingPlan final : public mpi::Plan {
 };
 
 TEST(Drive, TheClosingRoundDoesNotChangeTheCommittedState) {
-  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
-  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/closing.h5";
-  path = mpi::broadcast(MPI_COMM_WORLD, path);
-  {
-    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
-    io::h5::File f = io::h5::File::create(path, true, fapl.id());
-    io::RunConfig cfg = io::default_config();
-    cfg.run.progress_every_s = 0;
-    cfg.output.checkpoint_every = 1;
-    ClosingPlan plan;
-    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [] {});  // no copies: every commit waits for the end
-    f.close();
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
+  ClosingPlan plan;
+  const std::string path = drive_into("closing.h5", plan, 1, [] {});  // no copies: every commit waits for the end
   if (rank_of() == 0) {
     io::h5::File f = io::h5::File::open(path);
     EXPECT_EQ(f.read<double>("closing/total", io::h5::Dims{1})[0], 6.0);
@@ -181,22 +177,10 @@ class IndependentPlan final : public mpi::Plan {
 };
 
 TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) {
-  std::string path = (std::filesystem::temp_directory_path() / "divcoll_drive_XXXXXX").string();
-  if (rank_of() == 0) path = std::string(mkdtemp(path.data())) + "/ind.h5";
-  path = mpi::broadcast(MPI_COMM_WORLD, path);
   const int R = 37;  // one item per round: up to 8 per rank go into one farm
   int commits = 0;
   IndependentPlan plan(R);
-  {
-    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
-    io::h5::File f = io::h5::File::create(path, true, fapl.id());
-    io::RunConfig cfg = io::default_config();
-    cfg.run.progress_every_s = 0;
-    cfg.output.checkpoint_every = 1;
-    mpi::drive(MPI_COMM_WORLD, cfg, f, plan, [&] { ++commits; });
-    f.close();
-  }
+  const std::string path = drive_into("ind.h5", plan, 1, [&] { ++commits; });
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   EXPECT_EQ(commits, (R + 8 * size - 1) / (8 * size)) << "one commit per farm of 8 rounds per rank";
