@@ -18,6 +18,7 @@
 #include <sys/prctl.h>
 #endif
 
+#include "mpi/node_cores.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/wait.hpp"
 
@@ -229,7 +230,8 @@ class Sender {
 };
 
 // does the master's node have a core for every rank on it? (Open MPI and MPICH say how many ranks share
-// the node; without either, every rank is assumed to be on the master's node)
+// the node; without either, every rank is assumed to be on the master's node. The cores are those the node
+// gives the job: mpi/node_cores.hpp)
 bool node_has_core_per_rank(int size) {
   int local = size;
   for (const char* var : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"})
@@ -237,8 +239,8 @@ bool node_has_core_per_rank(int size) {
       local = std::atoi(v);
       break;
     }
-  const unsigned cores = std::thread::hardware_concurrency();
-  return cores == 0 || local <= static_cast<int>(cores);
+  static const int cores = node_cores();
+  return local <= cores;
 }
 
 // how long a rank with a core of its own and nothing to compute looks again without sleeping: a worker for
