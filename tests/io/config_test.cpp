@@ -89,6 +89,20 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
   EXPECT_EQ(d.output.dir, "runs");
 }
 
+// paper.toml writes out every key with its meaning, unit and range, as the program documents them: below its own
+// header it is to_toml() of the defaults, word for word, so a new key or a changed meaning shows up here
+TEST(ConfigPresets, PaperWritesOutEveryKeyAsDocumented) {
+  std::ifstream in(preset("paper.toml"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string generated = to_toml(default_config());
+  const size_t a = text.find("\n[run]\n"), b = generated.find("\n[run]\n");
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  EXPECT_EQ(text.substr(a), generated.substr(b))
+      << "configs/paper.toml differs from the documented defaults: rewrite its body (from [run]) with to_toml of the "
+         "defaults, e.g. the `config` attribute of a run file of paper.toml";
+}
+
 // the quick preset runs every stage of the paper's pipeline, each count at most the paper's and the
 // expensive ones smaller; what it leaves out stays at the paper value
 TEST(ConfigPresets, QuickIsTheDemoScale) {
