@@ -165,9 +165,18 @@ def scale_section(run):
                    "summarises it.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
-    out = [verdict, "", "| count | config key | this run | paper |", "|---|---|---|---|"]
+    out = [verdict, "", precision_line(run), "", "| count | config key | this run | paper |", "|---|---|---|---|"]
     out += [f"| {what} | `{k}` | {v} | {p} |" for what, k, v, p in rows]
     return out + [""]
+
+
+def precision_line(run):
+    """the run's arithmetic (run.precision): two runs in different precisions are different runs, never bit-equal"""
+    prec = claims.key(claims.config(run), "run.precision") or "double"
+    if prec == "float_networks":
+        return ("Arithmetic: `run.precision = float_networks`: the controllers' networks in float, the physics and every "
+                "optimizer in double (README, \"A float path\"); its numbers are not bit-comparable with a double run's.")
+    return f"Arithmetic: `run.precision = {prec}` (the spec's)."
 
 
 def write_report(run, out_dir, divcoll, movie=False, quick=False):

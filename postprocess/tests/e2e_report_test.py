@@ -166,6 +166,7 @@ class EndToEnd(unittest.TestCase):
         stdout, page, text = self.report_page()
         self.assertIn("report.html", stdout)
         self.assertIn("Preset <code>tiny</code>", text)
+        self.assertIn("Arithmetic: <code>run.precision = double</code> (the spec's).", text)
         self.assertIn("too small to judge", text)
         self.assertIn("paper-scale report, from one run file of <code>configs/paper.toml</code>", text)
         self.assertIn("postprocess/gallery/paper_seed1/report.md", text)
