@@ -120,6 +120,13 @@ class ConnectorsPlan : public Plan {
     for (int c = 0; c < N_; ++c) r.rows.push_back(c);
     return r;
   }
+  // numerical trouble a step leaves out: pairs whose episode ran (status ok) but whose gradient was not finite,
+  // reported with where (they count in nan_pairs; one of them would have made the slot's weights NaN)
+  void report_bad_gradients(int it, int c, int n) const {
+    if (n == 0) return;
+    std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) ran but their gradient was not finite; left out of "
+                 "the step (counted in nan_pairs)\n", slots_[c].group.c_str(), slots_[c].column, it + 1, n);
+  }
   Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
     Records out = slot_row("curve_u", I_, it, cu);
     out += slot_row("curve_bl", I_, it, cb);
@@ -169,8 +176,7 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     for (int c = 0; c < N_; ++c)
       for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
     cu_.assign(N_, kNaN), cb_.assign(N_, kNaN), nn_.assign(N_, 0);
-    su_.assign(N_, 0.0), sb_.assign(N_, 0.0), ok_.assign(N_, 0);
-    g_.assign(N_, std::vector<double>(Pc_, 0.0));
+    sums_.assign(N_, collective::ProbeSum{});
     return items;
   }
   std::string compute(const std::string& item) override {
@@ -181,28 +187,27 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     return pack(episode(unpack<PairTask>(item), ro));
   }
   void reduce(int, int64_t i, const std::string& bytes) override {
-    const int c = static_cast<int>(i / B_);
-    const PairDone d = unpack<PairDone>(bytes);
-    if (d.status != 0 || !std::isfinite(d.travel_u)) {
-      ++nn_[c];
-      return;
-    }
-    ++ok_[c];
-    su_[c] += d.travel_u;
-    sb_[c] += d.travel_bl;
-    for (int q = 0; q < Pc_; ++q) g_[c][q] += d.grad[q];
+    PairDone d = unpack<PairDone>(bytes);
+    collective::PairOutcome o;
+    o.travel_u = d.travel_u, o.travel_bl = d.travel_bl, o.status = static_cast<sim::Status>(d.status);
+    o.grad = std::move(d.grad);
+    sums_[static_cast<size_t>(i / B_)].add(o);  // in pair order; a pair not ok or with a non-finite gradient is counted
   }
   Records end_round(int it) override {
     const auto& C = cfg_.connectors;
     for (int c = 0; c < N_; ++c) {
-      if (ok_[c] == 0) continue;
-      cu_[c] = su_[c] / ok_[c];
-      cb_[c] = sb_[c] / ok_[c];
-      for (double& x : g_[c]) x = -x / ok_[c];  // loss = −mean travel
+      const collective::ProbeResult r = sums_[c].mean();
+      nn_[c] = r.not_ok;
+      report_bad_gradients(it, c, r.bad_grad);
+      if (r.ok == 0) continue;
+      cu_[c] = r.travel_u;
+      cb_[c] = r.travel_bl;
+      std::vector<double> g = r.grad;
+      for (double& x : g) x = -x;  // loss = −mean travel
       if (C.optimizer == "adam")
-        adam_[c].step(params_[c], g_[c], C.lr, C.clip_norm, it + 1);
+        adam_[c].step(params_[c], g, C.lr, C.clip_norm, it + 1);
       else
-        evo::normalized_step(params_[c], g_[c], C.lr);
+        evo::normalized_step(params_[c], g, C.lr);
     }
     return curves(it, cu_, cb_, nn_);
   }
@@ -225,10 +230,10 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
   std::vector<std::vector<double>> weights() const override { return params_; }
 
  private:
-  std::vector<std::vector<double>> params_, g_;
+  std::vector<std::vector<double>> params_;
   std::vector<evo::Adam> adam_;
-  std::vector<double> cu_, cb_, nn_, su_, sb_;
-  std::vector<int> ok_;
+  std::vector<double> cu_, cb_, nn_;
+  std::vector<collective::ProbeSum> sums_;  // each slot's batch, summed in pair order
 };
 
 // the optimisation keys of issue 9.2: ask/tell optimizers, each probe a weight vector on a batch; with
@@ -327,7 +332,8 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
     std::vector<std::vector<collective::ProbeResult>> results(N_);
     vscore_.assign(N_, kNaN);
     size_t q = 0;
-    for (int c = 0; c < N_; ++c)
+    for (int c = 0; c < N_; ++c) {
+      int bad_grad = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
         collective::ProbeSum sum;
         for (int p = 0; p < counts_[c][w]; ++p, ++q) {
@@ -336,9 +342,12 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
           o.status = static_cast<sim::Status>(done_[q].status), o.grad = done_[q].grad;
           sum.add(o);
         }
+        bad_grad += sum.bad_grad;
         if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;
         else results[c].push_back(sum.mean());
       }
+      report_bad_gradients(it, c, bad_grad);
+    }
     Records out;
     if (it < I_) {
       cu_.assign(N_, kNaN), cb_.assign(N_, kNaN);

@@ -43,6 +43,10 @@ void ProbeSum::add(const PairOutcome& o) {
     ++not_ok;
     return;
   }
+  if (!all_finite(o.grad)) {
+    ++not_ok, ++bad_grad;
+    return;
+  }
   ++ok;
   su += o.travel_u;
   sb += o.travel_bl;
@@ -54,7 +58,7 @@ void ProbeSum::add(const PairOutcome& o) {
 
 ProbeResult ProbeSum::mean() const {
   ProbeResult r;
-  r.ok = ok, r.not_ok = not_ok;
+  r.ok = ok, r.not_ok = not_ok, r.bad_grad = bad_grad;
   r.travel_u = ok ? su / ok : kNaN;
   r.travel_bl = ok ? sb / ok : kNaN;
   r.grad = g;

@@ -18,6 +18,8 @@
 // farms the probes, `divcoll connector-opt` and the tests run them in a plain loop.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -55,15 +57,23 @@ bool extended(const OptSettings& s);
 double scheduled_lr(const OptSettings& s, int it, int iterations);
 
 // the mean over a batch of one probe's pair episodes (the caller sums in pair order)
+// every value finite (a gradient fit to step with)
+inline bool all_finite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
 struct ProbeResult {
   double travel_u = 0, travel_bl = 0;  // means over the ok pairs (NaN if none)
   int ok = 0, not_ok = 0;
+  int bad_grad = 0;          // of not_ok: pairs whose episode was ok but whose gradient was not finite
   std::vector<double> grad;  // mean d travel_u / d weights over the ok pairs (probes asked with grad)
 };
-// accumulates pair outcomes in pair order into a ProbeResult
+// accumulates pair outcomes in pair order into a ProbeResult. A pair whose gradient is not finite (an episode that
+// ran, but whose backward pass overflowed) counts as not ok, as an episode that failed does: one such pair would
+// otherwise turn the connector's weights into NaN at the next step
 struct ProbeSum {
   double su = 0, sb = 0;
-  int ok = 0, not_ok = 0;
+  int ok = 0, not_ok = 0, bad_grad = 0;
   std::vector<double> g;
   void add(const PairOutcome& o);
   ProbeResult mean() const;

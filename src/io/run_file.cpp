@@ -149,7 +149,8 @@ std::vector<Entry> base_entries() {
         "mean pair travel of the iteration's batch (its ok pairs)", true),
       D("connectors/{kind}/curve_bl", "float64", "iteration,replicate", "BL", "the same in body lengths", true),
       D("connectors/{kind}/nan_pairs", "float64", "iteration,replicate", "count",
-        "pairs of the batch whose episode was not ok (left out of the mean)", true),
+        "pairs of the batch whose episode was not ok or whose gradient was not finite (left out of the mean and the "
+        "step)", true),
       O("connectors/{kind}/val_bl", "float64", "iteration,replicate", "BL",
         "keep_best: mean validation travel of the weights before each step, then (row I) of the final weights"),
       O("connectors/{kind}/best_iteration", "float64", "replicate", "index", "keep_best: the row of val_bl whose weights were kept"),

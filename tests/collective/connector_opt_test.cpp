@@ -39,6 +39,30 @@ std::vector<ProbeResult> evaluate(const std::vector<Probe>& probes) {
   return rs;
 }
 
+// a pair whose episode ran but whose gradient overflowed is numerical trouble of that pair: it is left out of the
+// mean and counted, so it cannot turn the weights into NaN (seen in float_networks at paper scale: 3 of 20 strong
+// connectors, README "The whole paper in float")
+TEST(ConnectorOpt, APairWithANonFiniteGradientIsLeftOutAndCounted) {
+  collective::ProbeSum sum;
+  collective::PairOutcome good, overflowed, failed;
+  good.travel_u = 0.5, good.travel_bl = 2.0, good.grad = {1.0, -2.0};
+  overflowed.travel_u = 0.7, overflowed.travel_bl = 3.0, overflowed.grad = {INFINITY, 1.0};
+  failed.status = sim::Status::nan, failed.travel_u = NAN;
+  sum.add(good), sum.add(overflowed), sum.add(failed);
+  const ProbeResult r = sum.mean();
+  EXPECT_EQ(r.ok, 1);
+  EXPECT_EQ(r.not_ok, 2);
+  EXPECT_EQ(r.bad_grad, 1);
+  EXPECT_EQ(r.travel_bl, 2.0);
+  EXPECT_EQ(r.grad, (std::vector<double>{1.0, -2.0}));
+  collective::PairOutcome nan_grad = good;
+  nan_grad.grad[1] = NAN;
+  collective::ProbeSum only_bad;
+  only_bad.add(nan_grad);
+  EXPECT_EQ(only_bad.mean().ok, 0);
+  EXPECT_TRUE(std::isnan(only_bad.mean().travel_bl));
+}
+
 TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
   OptSettings s;
   s.lr = 0.01;
