@@ -48,6 +48,13 @@ template <class Ar>
 void serialize(Ar& ar, PairDone& d, unsigned) {
   ar & d.travel_u & d.travel_bl & d.status & d.grad;
 }
+// a finished pair as collective::ProbeSum takes it (by value: a caller done with `d` moves its gradient in)
+collective::PairOutcome outcome(PairDone d) {
+  collective::PairOutcome o;
+  o.travel_u = d.travel_u, o.travel_bl = d.travel_bl, o.status = static_cast<sim::Status>(d.status);
+  o.grad = std::move(d.grad);
+  return o;
+}
 
 Records& operator+=(Records& a, Records b) {
   for (Record& r : b) a.push_back(std::move(r));
@@ -187,27 +194,23 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     return pack(episode(unpack<PairTask>(item), ro));
   }
   void reduce(int, int64_t i, const std::string& bytes) override {
-    PairDone d = unpack<PairDone>(bytes);
-    collective::PairOutcome o;
-    o.travel_u = d.travel_u, o.travel_bl = d.travel_bl, o.status = static_cast<sim::Status>(d.status);
-    o.grad = std::move(d.grad);
-    sums_[static_cast<size_t>(i / B_)].add(o);  // in pair order; a pair not ok or with a non-finite gradient is counted
+    // in pair order; a pair not ok or with a non-finite gradient is counted
+    sums_[static_cast<size_t>(i / B_)].add(outcome(unpack<PairDone>(bytes)));
   }
   Records end_round(int it) override {
     const auto& C = cfg_.connectors;
     for (int c = 0; c < N_; ++c) {
-      const collective::ProbeResult r = sums_[c].mean();
+      collective::ProbeResult r = sums_[c].mean();
       nn_[c] = r.not_ok;
       report_bad_gradients(it, c, r.bad_grad);
       if (r.ok == 0) continue;
       cu_[c] = r.travel_u;
       cb_[c] = r.travel_bl;
-      std::vector<double> g = r.grad;
-      for (double& x : g) x = -x;  // loss = −mean travel
+      for (double& x : r.grad) x = -x;  // loss = −mean travel
       if (C.optimizer == "adam")
-        adam_[c].step(params_[c], g, C.lr, C.clip_norm, it + 1);
+        adam_[c].step(params_[c], r.grad, C.lr, C.clip_norm, it + 1);
       else
-        evo::normalized_step(params_[c], g, C.lr);
+        evo::normalized_step(params_[c], r.grad, C.lr);
     }
     return curves(it, cu_, cb_, nn_);
   }
@@ -336,12 +339,7 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
       int bad_grad = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
         collective::ProbeSum sum;
-        for (int p = 0; p < counts_[c][w]; ++p, ++q) {
-          collective::PairOutcome o;
-          o.travel_u = done_[q].travel_u, o.travel_bl = done_[q].travel_bl;
-          o.status = static_cast<sim::Status>(done_[q].status), o.grad = done_[q].grad;
-          sum.add(o);
-        }
+        for (int p = 0; p < counts_[c][w]; ++p, ++q) sum.add(outcome(done_[q]));
         bad_grad += sum.bad_grad;
         if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;
         else results[c].push_back(sum.mean());

@@ -7,7 +7,8 @@
 //   <kind>/params      (R × P_c)   trained weights, written when the stage completes
 //   <kind>/curve_u     (I × R)     mean pair travel of each iteration's batch, u (before that step)
 //   <kind>/curve_bl    (I × R)     the same in body lengths
-//   <kind>/nan_pairs   (I × R)     pairs of the batch whose episode was not ok or whose gradient was not finite (left out of the mean and the step)
+//   <kind>/nan_pairs   (I × R)     pairs of the batch whose episode was not ok or whose gradient was not finite
+//                                  (left out of the mean and the step)
 //   state/params, state/adam_m, state/adam_v  (K·R × P_c)  the optimizer state at the last checkpoint
 //   anchors            (P × 4)     each agent's back foot, front foot, back upper, front upper (§6.1), stored once
 #pragma once

@@ -56,12 +56,12 @@ bool extended(const OptSettings& s);
 // the learning rate of iteration it (0-based) of `iterations`: lr at it = 0, lr·lr_final at the last iteration
 double scheduled_lr(const OptSettings& s, int it, int iterations);
 
-// the mean over a batch of one probe's pair episodes (the caller sums in pair order)
 // every value finite (a gradient fit to step with)
 inline bool all_finite(const std::vector<double>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
 }
 
+// the mean over a batch of one probe's pair episodes (the caller sums in pair order)
 struct ProbeResult {
   double travel_u = 0, travel_bl = 0;  // means over the ok pairs (NaN if none)
   int ok = 0, not_ok = 0;
