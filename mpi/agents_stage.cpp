@@ -1,6 +1,7 @@
 #include "mpi/agents_stage.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -65,6 +66,17 @@ Records pool_records(const std::string& g, const std::vector<Row>& rows, int epo
   return out;
 }
 
+// a trained agent, and how long its training took (seconds of compute(): only to hand out the next
+// generation's dearest items first, never recorded)
+struct Trained {
+  evo::Individual x;
+  double train_s = 0;
+};
+template <class Ar>
+void serialize(Ar& ar, Trained& t, unsigned) {
+  ar & t.x & t.train_s;
+}
+
 std::string gen_name(const std::string& group, int g) {
   char b[32];
   std::snprintf(b, sizeof b, "/gen_%03d", g);
@@ -115,25 +127,45 @@ class AgentsPlan final : public Plan {
       tasks.push_back(pack(x));
     }
     trained_.assign(P_, {});
+    trained_s_.assign(P_, 0.0);
     return tasks;
   }
-  std::string compute(const std::string& bytes) override {
-    evo::Individual x = unpack<evo::Individual>(bytes);
-    x.train = evo::train_agent(x.agent, gd_, sim_);
-    x.descriptor = spec_.spring_descriptor ? evo::spring_layout_descriptor(x.agent) : evo::agent_descriptor(x.agent);
-    return pack(x);
+  // an offspring trains about as long as its parent did (contacts, the body); generation 0 and the first
+  // generation after a resume have no times
+  std::vector<double> item_costs(int g) const override {
+    if (g == 0 || static_cast<int>(parent_s_.size()) != P_) return {};
+    for (double s : parent_s_)
+      if (!(s > 0)) return {};  // a parent from before a resume
+    return parent_s_;
   }
-  void reduce(int, int64_t i, const std::string& bytes) override { trained_[i] = unpack<evo::Individual>(bytes); }
+  std::string compute(const std::string& bytes) override {
+    const auto t0 = std::chrono::steady_clock::now();
+    Trained t{unpack<evo::Individual>(bytes)};
+    t.x.train = evo::train_agent(t.x.agent, gd_, sim_);
+    t.x.descriptor = spec_.spring_descriptor ? evo::spring_layout_descriptor(t.x.agent) : evo::agent_descriptor(t.x.agent);
+    t.train_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return pack(t);
+  }
+  void reduce(int, int64_t i, const std::string& bytes) override {
+    Trained t = unpack<Trained>(bytes);
+    trained_[i] = std::move(t.x);
+    trained_s_[i] = t.train_s;
+  }
   // the pool (parents, then the new agents), its selection, and its rows
   Records end_round(int g) override {
     std::vector<evo::Individual> pool = g == 0 ? std::vector<evo::Individual>{} : population_;
     for (auto& x : trained_) pool.push_back(std::move(x));
+    // training times beside the pool (a parent's unknown after a resume: 0)
+    std::vector<double> pool_s(pool.size() - trained_s_.size(), 0.0);
+    if (parent_s_.size() == pool_s.size()) pool_s = parent_s_;
+    pool_s.insert(pool_s.end(), trained_s_.begin(), trained_s_.end());
     std::vector<Row> rows(pool.size());
     for (size_t i = 0; i < pool.size(); ++i) rows[i].ind = &pool[i];
     std::vector<double> uniq;
     const std::vector<int> keep = evo::select_survivors(pool, P_, A_.uniqueness_k, &uniq, A_.selection == "rank");
     std::vector<evo::Individual> next;
-    for (int i : keep) rows[i].survived = 1, next.push_back(pool[i]);
+    parent_s_.clear();
+    for (int i : keep) rows[i].survived = 1, next.push_back(pool[i]), parent_s_.push_back(pool_s[i]);
     for (size_t i = 0; i < pool.size(); ++i) rows[i].uniqueness = uniq[i];
     Records out = pool_records(gen_name(spec_.group, g), rows, A_.epochs);
     population_ = std::move(next);
@@ -174,6 +206,8 @@ class AgentsPlan final : public Plan {
   evo::MutationOptions mut_;
   std::vector<evo::Individual> population_;  // the master's survivors
   std::vector<evo::Individual> trained_;     // the round's new agents, in item order
+  std::vector<double> trained_s_;            // their training times (s)
+  std::vector<double> parent_s_;             // the survivors' training times (s), when known
   sim::Simulator sim_;
 };
 

@@ -239,6 +239,14 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
     std::vector<std::string> items;
     std::vector<int64_t> first = {0};  // where each step's items start in `items`
+    std::vector<double> costs;         // the plan's cost estimates of `items`, if it gave them for every step
+    bool costed = true;
+    auto add_costs = [&](int step, size_t count) {
+      std::vector<double> c = plan.item_costs(step);
+      DIVCOLL_DEMAND(c.empty() || c.size() == count);
+      costed = costed && !c.empty();
+      costs.insert(costs.end(), c.begin(), c.end());
+    };
     int m = 0;
     auto tp = std::chrono::steady_clock::now();
     auto lap = [&](double& into) {
@@ -254,6 +262,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
           DIVCOLL_DEMAND(in.empty());
           plan.take_input(r + m, in);
           std::vector<std::string> more = plan.items(r + m);
+          add_costs(r + m, more.size());
           std::move(more.begin(), more.end(), std::back_inserter(items));
           first.push_back(static_cast<int64_t>(items.size()));
           ++m;
@@ -273,11 +282,14 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
         plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
         lap(clock.input_s);
         items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
+        costs.clear(), costed = true;
+        if (rank == 0) add_costs(step, items.size());
         first = {0, static_cast<int64_t>(items.size())};
         lap(clock.items_s);
       }
       n_items += items.size();
       FarmOptions fo;
+      if (rank == 0 && costed) fo.costs = std::move(costs);  // the farm hands out the dearest first
       size_t at = 0;  // the step of the latest result (results come in item order)
       fo.on_result = [&](int64_t i, const std::string& bytes) {
         while (i >= first[at + 1]) ++at;

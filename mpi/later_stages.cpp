@@ -60,6 +60,9 @@ EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std:
   return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
 }
 
+// an episode's cost for the farm's order: its agents (a connector costs about as much as an agent's network)
+double episode_cost(const GroupEpisode& e) { return 2.0 * static_cast<double>(e.agents.size()) - 1.0; }
+
 // mean over ok episodes [b, e) of `d`, and how many were not ok
 std::pair<double, int> ok_mean(const std::vector<EpisodeDone>& d, size_t b, size_t e) {
   double s = 0;
@@ -91,10 +94,12 @@ class EpisodesPlan final : public Plan {
   void start(int, const StoredState&) override {}
   std::vector<std::string> items(int e) override {
     std::vector<std::string> items;
-    for (const GroupEpisode& g : round_items_(e)) items.push_back(pack(g));
+    costs_.clear();
+    for (const GroupEpisode& g : round_items_(e)) items.push_back(pack(g)), costs_.push_back(episode_cost(g));
     done_.clear();
     return items;
   }
+  std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
     return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, envs_, steps_, false));
   }
@@ -133,6 +138,7 @@ class EpisodesPlan final : public Plan {
   const Summary summary_;
   sim::Simulator sim_;
   std::vector<EpisodeDone> done_;
+  std::vector<double> costs_;  // the last items()' costs (episode_cost)
 };
 
 
@@ -234,14 +240,19 @@ class ScalingPlan final : public Plan {
   void start(int, const StoredState&) override {}
   std::vector<std::string> items(int ei) override {
     std::vector<std::string> items;
+    costs_.clear();
     for (int si = 0; si < NS_; ++si)
       for (int v = 0; v < 2; ++v)
         for (int r = 0; r < R_; ++r)
-          for (int q = 0; q < D_; ++q)
-            items.push_back(pack(GroupEpisode{v * R_ + r, ei, chains_[si * 2 + v][static_cast<size_t>(r) * D_ + q]}));
+          for (int q = 0; q < D_; ++q) {
+            const GroupEpisode g{v * R_ + r, ei, chains_[si * 2 + v][static_cast<size_t>(r) * D_ + q]};
+            items.push_back(pack(g)), costs_.push_back(episode_cost(g));
+          }
     done_.clear();
     return items;
   }
+  // the 20-agent chains first, so that an environment's round ends on 5-agent ones
+  std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
     return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"),
                               cfg_.deploy.environments, S_.episode_steps, true));
@@ -278,6 +289,7 @@ class ScalingPlan final : public Plan {
   std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
   sim::Simulator sim_;
   std::vector<EpisodeDone> done_;
+  std::vector<double> costs_;  // the last items()' costs (episode_cost)
 };
 
 }  // namespace

@@ -85,6 +85,10 @@ class Plan {
   virtual void take_input(int step, const std::string& input) { (void)step, (void)input; }
   // master: the step's items
   virtual std::vector<std::string> items(int step) = 0;
+  // master, right after items(step): optional estimates of each item's compute time (any unit: agents per
+  // episode, seconds an agent's parent took to train), one per item, or empty. The farm hands the dearest out
+  // first so that the round ends on cheap items; only who computes what changes, never a result
+  virtual std::vector<double> item_costs(int step) const { (void)step; return {}; }
   // every rank, in a thread of the farm: one item's pure compute (task bytes -> result bytes)
   virtual std::string compute(const std::string& item) = 0;
   // master: every result of the step, in item order

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
@@ -12,12 +13,14 @@
 #include <iterator>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <thread>
 
 #ifdef __linux__
 #include <sys/prctl.h>
 #endif
 
+#include "common/check.hpp"
 #include "mpi/node_cores.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/wait.hpp"
@@ -79,8 +82,16 @@ double thread_cpu_s() {
 class Backoff {
  public:
   static constexpr int kMinUs = 20, kMaxUs = 2000;
-  // the master's longest look-away in a round's tail, where a worker waits for its next item
-  static constexpr int kTailUs = 200;
+  // the master's longest look-away in a round's tail, where a worker waits for its next item: at least
+  // kTailUs; when the master computes items too, sqrt(2 × kWakeCostUs × its mean item time), at most kMaxUs.
+  // Each look takes the master's core from its computing thread for about kWakeCostUs (measured on a 2-core
+  // VM: looking every 200 µs made the master's 19 ms items 15% slower), and a worker waits half a look on
+  // average for each item of the tail; that interval balances the two losses.
+  static constexpr int kTailUs = 200, kWakeCostUs = 30;
+  static int tail_us(double mean_item_s) {
+    if (!(mean_item_s > 0)) return kTailUs;
+    return static_cast<int>(std::clamp(std::sqrt(2.0 * kWakeCostUs * mean_item_s * 1e6), double{kTailUs}, double{kMaxUs}));
+  }
   // a calm worker's look-away: its computing thread has a block and wakes it when it finishes
   static constexpr int kCalmWorkerUs = 10000;
 
@@ -97,42 +108,50 @@ class Backoff {
   int us_ = kMinUs;
 };
 
-// a block message (tasks or results): [first | count | count sizes | payloads], all int64
-std::string pack_block(int64_t first, const std::string* payloads, int64_t count) {
-  size_t total = (2 + count) * sizeof(int64_t);
-  for (int64_t k = 0; k < count; ++k) total += payloads[k].size();
+// a block message (tasks or results): [count | count item indices | count sizes | payloads], all int64;
+// payload(k) is the k-th item's bytes
+template <class Payload>
+std::string pack_block(const int64_t* index, int64_t count, Payload payload) {
+  size_t total = (1 + 2 * count) * sizeof(int64_t);
+  for (int64_t k = 0; k < count; ++k) total += payload(k).size();
   std::string buf(total, '\0');
   char* p = buf.data();
   auto put = [&](int64_t v) {
     std::memcpy(p, &v, sizeof v);
     p += sizeof v;
   };
-  put(first);
   put(count);
-  for (int64_t k = 0; k < count; ++k) put(static_cast<int64_t>(payloads[k].size()));
+  for (int64_t k = 0; k < count; ++k) put(index[k]);
+  for (int64_t k = 0; k < count; ++k) put(static_cast<int64_t>(payload(k).size()));
   for (int64_t k = 0; k < count; ++k) {
-    std::memcpy(p, payloads[k].data(), payloads[k].size());
-    p += payloads[k].size();
+    const std::string& x = payload(k);
+    std::memcpy(p, x.data(), x.size());
+    p += x.size();
   }
   return buf;
 }
 
-// the first index of a block message and its payloads
-std::pair<int64_t, std::vector<std::string>> unpack_block(const char* buf) {
+// a block message's item indices and payloads
+struct Block {
+  std::vector<int64_t> index;
+  std::vector<std::string> data;
+};
+Block unpack_block(const char* buf) {
   auto get = [&](size_t at) {
     int64_t v = 0;
     std::memcpy(&v, buf + at * sizeof v, sizeof v);
     return v;
   };
-  const int64_t first = get(0), count = get(1);
-  std::vector<std::string> out(count);
-  size_t at = (2 + count) * sizeof(int64_t);
+  const int64_t count = get(0);
+  Block out{std::vector<int64_t>(count), std::vector<std::string>(count)};
+  size_t at = (1 + 2 * count) * sizeof(int64_t);
   for (int64_t k = 0; k < count; ++k) {
-    const auto len = static_cast<size_t>(get(2 + k));
-    out[k].assign(buf + at, len);
+    out.index[k] = get(1 + k);
+    const auto len = static_cast<size_t>(get(1 + count + k));
+    out.data[k].assign(buf + at, len);
     at += len;
   }
-  return {first, std::move(out)};
+  return out;
 }
 
 // requests in flight with the buffers they use: one MPI_Testsome looks at all of them
@@ -270,6 +289,8 @@ struct Shared {
   std::exception_ptr error;
   double compute_s = 0, compute_cpu_s = 0;
   long items = 0;
+  double own_s = 0;     // the master: wall seconds of the items its computing thread finished in this farm()
+  long own_items = 0;   // and how many
 };
 
 // records one compute() call's time: wall seconds, and CPU seconds of the calling thread (less than the wall
@@ -292,7 +313,19 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   const bool master_computes = opt.master_works && node_has_core_per_rank(size);
   const int computing = size - 1 + (master_computes ? 1 : 0);
   Shared sh;
-  int64_t next = 0;                  // first item not yet handed out (guarded by sh.mu)
+  // with costs, items go out dearest first (equal costs in index order): position p is item order[p], and
+  // cum[p] the cost of the items before it
+  std::vector<int64_t> order;
+  std::vector<double> cum;
+  if (!opt.costs.empty()) {
+    order.resize(n);
+    std::iota(order.begin(), order.end(), int64_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return opt.costs[a] > opt.costs[b]; });
+    cum.assign(n + 1, 0.0);
+    for (int64_t p = 0; p < n; ++p) cum[p + 1] = cum[p] + opt.costs[order[p]];
+  }
+  const auto at = [&](int64_t pos) { return order.empty() ? pos : order[pos]; };
+  int64_t next = 0;                  // first position not yet handed out (guarded by sh.mu)
   std::vector<char> have(n, 0);      // item has its result on the master (guarded by sh.mu)
   int64_t local_new = 0;             // items the master's thread finished since the server last looked
   bool local_running = false;
@@ -314,7 +347,11 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       // that no item waits in one worker's queue while another rank, the master too, has nothing to do
       if (in_tail(left) && held[w] > 0 && opt.block <= 0) return;
       if (left > 0) {
-        const int64_t guided = (left + 4 * computing - 1) / (4 * computing);
+        int64_t guided = (left + 4 * computing - 1) / (4 * computing);
+        if (!cum.empty()) {  // by cost: the dearest items left, as few as make 1/(4 × computing) of the cost left
+          const double target = (cum[n] - cum[next]) / (4.0 * computing);
+          guided = std::lower_bound(cum.begin() + next + 1, cum.end(), cum[next] + target) - (cum.begin() + next);
+        }
         count = std::min(left, opt.block > 0 ? int64_t{opt.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt.max_block)));
         first = next;
         next += count;
@@ -322,11 +359,12 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     }
     if (count > 0) {
       ++held[w];
-      std::fill(out.owner.begin() + first, out.owner.begin() + first + count, w);
-      std::string buf = pack_block(first, items.data() + first, count);
+      std::vector<int64_t> index(count);
+      for (int64_t k = 0; k < count; ++k) out.owner[index[k] = at(first + k)] = w;
+      std::string buf = pack_block(index.data(), count, [&](int64_t k) -> const std::string& { return items[index[k]]; });
       clock.task_bytes += static_cast<double>(buf.size());
       ++clock.task_msgs;
-      trace().add('G', static_cast<double>(first));
+      trace().add('G', static_cast<double>(index[0]));
       sender.send(w, kTask, std::move(buf));
     } else if (!ended[w]) {
       ended[w] = 1;
@@ -347,10 +385,11 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
       long count = 0;
       std::unique_lock lk(sh.mu);
       while (next < n && !sh.error) {
-        const int64_t i = next++;
+        const int64_t i = at(next++);
         out.owner[i] = 0;
         lk.unlock();
         std::string r;
+        const double before = secs;
         try {
           r = timed_compute(compute, items[i], secs, cpu);
         } catch (...) {
@@ -359,6 +398,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
           break;
         }
         lk.lock();
+        sh.own_s += secs - before, ++sh.own_items;
         out.results[i] = std::move(r);
         have[i] = 1;
         ++local_new, ++count;
@@ -416,12 +456,12 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     for (const auto& m : receiver.take()) {
       active = true;
       const auto t0 = Clock::now();
-      auto [first, results] = unpack_block(m->bytes.get());
-      const auto count = static_cast<int64_t>(results.size());
-      for (int64_t k = 0; k < count; ++k) out.results[first + k] = std::move(results[k]);
+      Block b = unpack_block(m->bytes.get());
+      const auto count = static_cast<int64_t>(b.data.size());
+      for (int64_t k = 0; k < count; ++k) out.results[b.index[k]] = std::move(b.data[k]);
       {
         std::lock_guard lk(sh.mu);
-        std::fill(have.begin() + first, have.begin() + first + count, 1);
+        for (int64_t i : b.index) have[i] = 1;
       }
       clock.result_bytes += static_cast<double>(m->size);
       ++clock.result_msgs;
@@ -458,8 +498,9 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     } else {
       std::unique_lock lk(sh.mu);
       // in the round's tail a worker waits for its next item: look more often
+      const int tail_us = Backoff::tail_us(sh.own_items > 0 ? sh.own_s / static_cast<double>(sh.own_items) : 0.0);
       const auto nap = calm ? std::chrono::microseconds(Backoff::kMaxUs)
-                            : backoff.next(in_tail(n - next) ? Backoff::kTailUs : Backoff::kMaxUs);
+                            : backoff.next(in_tail(n - next) ? tail_us : Backoff::kMaxUs);
       sh.to_server.wait_for(lk, nap, [&] { return local_new > 0 || sh.error || (!local_running && running); });
     }
   }
@@ -472,11 +513,7 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
 
 void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute, FarmResult& out,
                   FarmClock& clock, bool own_core) {
-  struct Block {
-    int64_t first = 0;
-    std::vector<std::string> data;  // tasks, then their results
-  };
-  Shared sh;
+  Shared sh;  // a Block's data: its tasks, then their results
   std::deque<Block> queued, computed;
   bool busy = false, stop = false;
   std::thread worker([&] {
@@ -546,10 +583,10 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
         got_end = true;
         continue;
       }
-      auto [first, tasks] = unpack_block(m->bytes.get());
+      Block b = unpack_block(m->bytes.get());
       {
         std::lock_guard lk(sh.mu);
-        queued.push_back(Block{first, std::move(tasks)});
+        queued.push_back(std::move(b));
       }
       sh.to_worker.notify_one();
     }
@@ -565,9 +602,10 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
     if (error) std::rethrow_exception(error);
     for (Block& b : ready) {  // results go out at once, without waiting for the master to take them
       active = true;
-      trace().add('S', static_cast<double>(b.first));
-      sender.send(0, kResult, pack_block(b.first, b.data.data(), static_cast<int64_t>(b.data.size())));
-      for (size_t k = 0; k < b.data.size(); ++k) out.results[b.first + k] = std::move(b.data[k]);
+      const auto count = static_cast<int64_t>(b.data.size());
+      trace().add('S', static_cast<double>(b.index[0]));
+      sender.send(0, kResult, pack_block(b.index.data(), count, [&](int64_t k) -> const std::string& { return b.data[k]; }));
+      for (int64_t k = 0; k < count; ++k) out.results[b.index[k]] = std::move(b.data[k]);
     }
     sender.reap();
     if (got_end && idle && ready.empty() && receiver.empty()) break;
@@ -649,6 +687,11 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
       trace().flush(rank);
     }
   } trace_end{rank};
+  if (rank == 0 && !opt.costs.empty()) {
+    bool good = static_cast<int64_t>(opt.costs.size()) == n;
+    for (double c : opt.costs) good = good && std::isfinite(c) && c > 0;
+    DIVCOLL_DEMAND(good);  // FarmOptions::costs: one positive cost per item
+  }
   FarmResult out;
   if (size == 1) {
     out.results.resize(n);

@@ -27,7 +27,8 @@ struct FarmOptions {
   bool master_works = true;
   // called on the master after each finished item with (items done, items total)
   std::function<void(int, int)> progress;
-  // items per task message: 0 = automatic (guided: ⌈items left / (4 × computing ranks)⌉, at most max_block);
+  // items per task message: 0 = automatic (guided: ⌈items left / (4 × computing ranks)⌉, at most max_block;
+  // with costs, the fewest dearest items that make that share of the cost left);
   // a block's results come back in one message. Results never depend on it.
   int block = 0;
   int max_block = 64;
@@ -35,6 +36,12 @@ struct FarmOptions {
   // than 4 per computing rank, automatic blocks) a worker holds one item at a time and gets the next when its
   // result comes back, so that no item waits in one worker's queue while another rank has nothing to do
   int depth = 2;
+  // estimates of each item's compute time, any unit, all > 0 (significant on rank 0 only; empty: all equal).
+  // The master hands items out dearest first (equal costs in index order) and sizes its guided blocks by
+  // cost, so a round ends on cheap items and its tail (where ranks wait for the last item) is short. Results
+  // are still placed, and folded by on_result, by item index: they never depend on it. One rank computes in
+  // index order.
+  std::vector<double> costs;
   // called on the master, in item order, as soon as items 0..i all have results (from farm()'s calling
   // thread, while later items are still being computed): lets the caller fold results during the round
   std::function<void(int64_t, const std::string&)> on_result;

@@ -2,9 +2,11 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <vector>
 #include <filesystem>
 #include <string>
@@ -84,20 +86,40 @@ std::string expected_result(int64_t i) {
   return r;
 }
 
-// every block size, depth and item count (none, fewer than the ranks, many) gives the same results in item
-// order on the master, each item computed once, in-order on_result and one progress call per item
-TEST(Farm, ResultsDoNotDependOnBlocksDepthOrRanks) {
+// item costs for FarmOptions::costs: 0 none, 1 rising with the index, 2 a fixed shuffle of 1..n, 3 two
+// levels (every third item dear, as pairs among agents alone)
+std::vector<double> item_costs(int kind, int n) {
+  std::vector<double> c;
+  if (kind == 0) return c;
+  for (int i = 0; i < n; ++i) c.push_back(kind == 3 ? (i % 3 == 0 ? 3.0 : 1.0) : i + 1.0);
+  uint64_t x = 12345;
+  if (kind == 2)
+    for (int i = n - 1; i > 0; --i) {
+      x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+      std::swap(c[i], c[(x >> 33) % static_cast<uint64_t>(i + 1)]);
+    }
+  return c;
+}
+
+// every block size, depth, item count (none, fewer than the ranks, many) and item costs give the same
+// results in item order on the master, each item computed once, in-order on_result and one progress call per
+// item; with costs, every rank computes its items dearest first (at one rank: in index order)
+TEST(Farm, ResultsDoNotDependOnBlocksDepthOrderOrRanks) {
   struct Case {
     int n, block, max_block, depth;
     bool master_works;
+    int costs = 0;  // item_costs(kind)
   };
   const std::vector<Case> cases = {
       {0, 0, 64, 2, true},   {1, 0, 64, 2, true},   {2, 0, 64, 2, false}, {3, 1, 64, 1, true},
       {5, 2, 64, 3, false},  {17, 0, 4, 2, true},   {17, 1000, 64, 2, true}, {64, 7, 64, 1, false},
-      {100, 0, 64, 2, true}, {100, 0, 1, 4, false}, {257, 3, 64, 2, true}, {257, 0, 64, 2, false}};
+      {100, 0, 64, 2, true}, {100, 0, 1, 4, false}, {257, 3, 64, 2, true}, {257, 0, 64, 2, false},
+      {1, 0, 64, 2, true, 1}, {17, 0, 64, 2, false, 1}, {100, 0, 64, 2, true, 2}, {100, 3, 64, 1, false, 2},
+      {257, 0, 64, 2, true, 1}, {257, 0, 4, 3, false, 2},    {48, 0, 64, 2, true, 3}, {97, 0, 64, 2, false, 3}};
   for (const Case& c : cases) {
     SCOPED_TRACE(::testing::Message() << "n " << c.n << " block " << c.block << " max_block " << c.max_block
-                                      << " depth " << c.depth << " master_works " << c.master_works);
+                                      << " depth " << c.depth << " master_works " << c.master_works << " costs "
+                                      << c.costs);
     std::vector<std::string> items;
     if (rank_of() == 0)
       for (int i = 0; i < c.n; ++i) items.push_back(mpi::pack(static_cast<int64_t>(i)));
@@ -109,6 +131,16 @@ TEST(Farm, ResultsDoNotDependOnBlocksDepthOrRanks) {
     opt.max_block = c.max_block;
     opt.depth = c.depth;
     opt.master_works = c.master_works;
+    // the hand-out order the costs ask for: dearest first, equal costs in index order
+    const std::vector<double> costs = item_costs(c.costs, c.n);
+    std::vector<int64_t> order(c.n);
+    std::iota(order.begin(), order.end(), int64_t{0});
+    if (!costs.empty())
+      std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return costs[a] > costs[b]; });
+    std::vector<int64_t> position(c.n);  // an item's place in the hand-out order
+    for (int p = 0; p < c.n; ++p) position[order[p]] = p;
+    if (rank_of() == 0) opt.costs = costs;
+    std::vector<int64_t> computed_order;
     opt.progress = [&](int done, int total) {
       ++progress_calls;
       EXPECT_EQ(done, last_done + 1);
@@ -122,6 +154,7 @@ TEST(Farm, ResultsDoNotDependOnBlocksDepthOrRanks) {
     const mpi::FarmResult r = mpi::farm(MPI_COMM_WORLD, items, [&](const std::string& b) {
       ++computed_here;
       const int64_t i = mpi::unpack<int64_t>(b);
+      computed_order.push_back(i);
       volatile double s = 0;  // uneven item costs, so the items spread unevenly over the ranks
       for (int k = 0; k < 20000 * (i % 5); ++k) s = s + 1e-9 * k;
       return expected_result(i);
@@ -143,6 +176,9 @@ TEST(Farm, ResultsDoNotDependOnBlocksDepthOrRanks) {
       }
     }
     EXPECT_EQ(mine, computed_here);
+    for (size_t k = 1; k < computed_order.size(); ++k)
+      if (size_of() == 1) EXPECT_LT(computed_order[k - 1], computed_order[k]) << "one rank computes in item order";
+      else EXPECT_LT(position[computed_order[k - 1]], position[computed_order[k]]) << "not computed in the given order";
     if (rank_of() == 0) {
       EXPECT_EQ(progress_calls, c.n);
       ASSERT_EQ(static_cast<int>(folded.size()), c.n);
