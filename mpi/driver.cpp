@@ -227,8 +227,6 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   const auto t_stage = std::chrono::steady_clock::now();
   double last_print = -1e9;
   const int end = R + (plan.closing_round() ? 1 : 0);
-  // independent rounds are farmed together until a farm has this many items per rank (mpi/plan.hpp)
-  constexpr size_t kMinItemsPerRank = 8;
   int size = 1;
   MPI_Comm_size(comm, &size);
   DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
@@ -266,7 +264,7 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
           std::move(more.begin(), more.end(), std::back_inserter(items));
           first.push_back(static_cast<int64_t>(items.size()));
           ++m;
-        } while (r + m < R && items.size() < kMinItemsPerRank * static_cast<size_t>(size) &&
+        } while (r + m < R && items.size() < kTogetherItemsPerRank * static_cast<size_t>(size) &&
                  !debug_exit_wanted(info.group, info.counter, r + m));  // the debug exit's commit stays one
       m = broadcast(comm, m);
       if (rank != 0)

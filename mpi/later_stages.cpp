@@ -89,42 +89,47 @@ class EpisodesPlan final : public Plan {
       : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
         tether_(tether), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
         round_items_(std::move(round_items)), summary_(std::move(summary)) {}
-  Info info() const override { return {label_, group_, "envs_done", "environment", "episodes", 1}; }
+  Info info() const override {
+    Info i{label_, group_, "envs_done", "environment", "episodes", 1};
+    i.independent_rounds = true;  // an episode's task names its environment; nothing passes between rounds
+    return i;
+  }
   int rounds() const override { return static_cast<int>(envs_.size()); }
   void start(int, const StoredState&) override {}
   std::vector<std::string> items(int e) override {
     std::vector<std::string> items;
     costs_.clear();
     for (const GroupEpisode& g : round_items_(e)) items.push_back(pack(g)), costs_.push_back(episode_cost(g));
-    done_.clear();
+    done_[e].clear();
     return items;
   }
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
     return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, envs_, steps_, false));
   }
-  void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
+  void reduce(int e, int64_t, const std::string& bytes) override { done_[e].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int e) override {
+    const std::vector<EpisodeDone>& done = done_.at(e);
     Records out;
     size_t at = 0;
     for (const Part& p : parts_) {
       std::vector<uint64_t> dims = {static_cast<uint64_t>(envs_.size())};
       dims.insert(dims.end(), p.dims.begin(), p.dims.end());
       const size_t n = std::accumulate(p.dims.begin(), p.dims.end(), size_t{1}, std::multiplies<>());
-      DIVCOLL_DEMAND(at + n <= done_.size());
+      DIVCOLL_DEMAND(at + n <= done.size());
       std::vector<double> tu, tb;
       std::vector<uint8_t> st;
       for (size_t q = at; q < at + n; ++q)
-        tu.push_back(done_[q].travel_u), tb.push_back(done_[q].travel_bl), st.push_back(done_[q].status);
+        tu.push_back(done[q].travel_u), tb.push_back(done[q].travel_bl), st.push_back(done[q].status);
       at += n;
       out.push_back({p.group + "/travel_u", dims, {e}, std::move(tu)});
       out.push_back({p.group + "/travel_bl", dims, {e}, std::move(tb)});
       out.push_back({p.group + "/status", dims, {e}, std::move(st)});
     }
-    DIVCOLL_DEMAND(at == done_.size());
+    DIVCOLL_DEMAND(at == done.size());
     return out;
   }
-  std::string summary(int e) const override { return summary_(e, done_); }
+  std::string summary(int e) const override { return summary_(e, done_.at(e)); }
 
  private:
   const std::string label_, group_;
@@ -137,7 +142,7 @@ class EpisodesPlan final : public Plan {
   const std::function<std::vector<GroupEpisode>(int)> round_items_;
   const Summary summary_;
   sim::Simulator sim_;
-  std::vector<EpisodeDone> done_;
+  std::map<int, std::vector<EpisodeDone>> done_;  // each environment's results (several are farmed at once)
   std::vector<double> costs_;  // the last items()' costs (episode_cost)
 };
 
@@ -215,7 +220,11 @@ class ScalingPlan final : public Plan {
           chains_[si * 2 + 1].push_back(distinct_agents(rng, pop, S_.sizes[si]));
         }
   }
-  Info info() const override { return {"scaling", "scaling", "envs_done", "environment", "chains", 1}; }
+  Info info() const override {
+    Info i{"scaling", "scaling", "envs_done", "environment", "chains", 1};
+    i.independent_rounds = true;  // a chain's task names its environment; nothing passes between rounds
+    return i;
+  }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
     return {{"environments", join(cfg_.deploy.environments)}, {"variants", std::string("uniform,diverse")}};
@@ -248,7 +257,7 @@ class ScalingPlan final : public Plan {
             const GroupEpisode g{v * R_ + r, ei, chains_[si * 2 + v][static_cast<size_t>(r) * D_ + q]};
             items.push_back(pack(g)), costs_.push_back(episode_cost(g));
           }
-    done_.clear();
+    done_[ei].clear();
     return items;
   }
   // the 20-agent chains first, so that an environment's round ends on 5-agent ones
@@ -257,11 +266,11 @@ class ScalingPlan final : public Plan {
     return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"),
                               cfg_.deploy.environments, S_.episode_steps, true));
   }
-  void reduce(int, int64_t, const std::string& bytes) override { done_.push_back(unpack<EpisodeDone>(bytes)); }
+  void reduce(int ei, int64_t, const std::string& bytes) override { done_[ei].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int ei) override {
     std::vector<double> tu, tb;
     std::vector<uint8_t> st;
-    for (const auto& x : done_) tu.push_back(x.travel_u), tb.push_back(x.travel_bl), st.push_back(x.status);
+    for (const auto& x : done_.at(ei)) tu.push_back(x.travel_u), tb.push_back(x.travel_bl), st.push_back(x.status);
     const std::vector<uint64_t> dims = {static_cast<uint64_t>(E_), static_cast<uint64_t>(NS_), 2, static_cast<uint64_t>(R_),
                                         static_cast<uint64_t>(D_)};
     return {{"scaling/travel_u", dims, {ei}, tu}, {"scaling/travel_bl", dims, {ei}, tb}, {"scaling/status", dims, {ei}, st}};
@@ -272,7 +281,7 @@ class ScalingPlan final : public Plan {
     for (int si = 0; si < NS_; ++si)
       for (int v = 0; v < 2; ++v) {
         const size_t at = (static_cast<size_t>(si) * 2 + v) * R_ * D_;
-        const auto [m, bad] = ok_mean(done_, at, at + static_cast<size_t>(R_) * D_);
+        const auto [m, bad] = ok_mean(done_.at(ei), at, at + static_cast<size_t>(R_) * D_);
         std::snprintf(b, sizeof b, " N=%d %s %.3f%s", S_.sizes[si], v ? "diverse" : "uniform", m,
                       bad ? (" (" + std::to_string(bad) + " not ok)").c_str() : "");
         s += b;
@@ -288,7 +297,7 @@ class ScalingPlan final : public Plan {
   const int E_, NS_, D_, R_;
   std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
   sim::Simulator sim_;
-  std::vector<EpisodeDone> done_;
+  std::map<int, std::vector<EpisodeDone>> done_;  // each environment's results (several are farmed at once)
   std::vector<double> costs_;  // the last items()' costs (episode_cost)
 };
 

@@ -53,8 +53,9 @@ class Plan {
     // results) is counted and committed as one. The methods marked (step) get step = round · passes + pass
     int passes = 1;
     // rounds that need nothing from each other (no round input; compute() reads only its item): the driver
-    // farms several in one call when a round alone has few items per rank (its tail, where ranks wait for the
-    // last item, would be a large share), and commits after the last of them. Each is still reduced,
+    // farms several in one call when a round alone has few items per rank (kTogetherItemsPerRank, mpi/driver.hpp;
+    // its tail, where ranks wait for the last item, would be a large share), and commits after the last of
+    // them. Each is still reduced,
     // recorded and counted as its own round, but items() of the later rounds comes before the earlier
     // rounds' reduce() and end_round(), so the plan keeps a round's results by its step. Passes must be 1
     bool independent_rounds = false;

@@ -177,13 +177,14 @@ class IndependentPlan final : public mpi::Plan {
 };
 
 TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) {
-  const int R = 37;  // one item per round: up to 8 per rank go into one farm
+  const int R = 3 * static_cast<int>(mpi::kTogetherItemsPerRank) + 5;  // one item per round: farms of several
   int commits = 0;
   IndependentPlan plan(R);
   const std::string path = drive_into("ind.h5", plan, 1, [&] { ++commits; });
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  EXPECT_EQ(commits, (R + 8 * size - 1) / (8 * size)) << "one commit per farm of 8 rounds per rank";
+  const int per_farm = static_cast<int>(mpi::kTogetherItemsPerRank) * size;
+  EXPECT_EQ(commits, (R + per_farm - 1) / per_farm) << "one commit per farm of kTogetherItemsPerRank rounds per rank";
   if (rank_of() == 0) {
     std::vector<int> in_order(R);
     for (int r = 0; r < R; ++r) in_order[r] = r;
