@@ -68,8 +68,10 @@ bool is_valid_springs(uint32_t springs, std::string* why = nullptr);
 bool is_valid(const Body& b, std::string* why = nullptr);
 
 // ---- enumeration ---------------------------------------------------------------------------------
-// every valid 28-bit body in every placement, ascending (computed once, then cached)
+// every valid 28-bit body in every placement, ascending (94 of them: a table checked against the enumeration below)
 const std::vector<uint32_t>& all_valid_placements();
+// the same by enumerating every 11-cell subset of the 28 cells (about 60 ms)
+std::vector<uint32_t> enumerate_valid_placements();
 // one placement per shape (see the header note), the lowest bit pattern of its class; ascending
 std::vector<uint32_t> all_valid_bodies_up_to_translation();
 // the representative (as above) of the shape of a valid placement

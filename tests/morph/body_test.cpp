@@ -159,6 +159,7 @@ TEST(BodyEnumeration, CountsPlacementsAndShapes) {
   // 94 placements, confirmed by an independent Python enumeration of connected 11-cell sets
   const auto& all = all_valid_placements();
   EXPECT_EQ(all.size(), 94u);
+  EXPECT_EQ(all, enumerate_valid_placements()) << "the table of placements is not what the enumeration finds";
   EXPECT_TRUE(std::is_sorted(all.begin(), all.end()));
   for (uint32_t b : all) expect_valid_by_definition(b);
 
