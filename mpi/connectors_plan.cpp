@@ -39,6 +39,7 @@ struct PairDone {
   double travel_u = 0, travel_bl = 0;
   uint8_t status = 0;
   std::vector<double> grad;
+  uint8_t redone_in_double = 0;
 };
 template <class Ar>
 void serialize(Ar& ar, PairTask& t, unsigned) {
@@ -46,13 +47,14 @@ void serialize(Ar& ar, PairTask& t, unsigned) {
 }
 template <class Ar>
 void serialize(Ar& ar, PairDone& d, unsigned) {
-  ar & d.travel_u & d.travel_bl & d.status & d.grad;
+  ar & d.travel_u & d.travel_bl & d.status & d.grad & d.redone_in_double;
 }
 // a finished pair as collective::ProbeSum takes it (by value: a caller done with `d` moves its gradient in)
 collective::PairOutcome outcome(PairDone d) {
   collective::PairOutcome o;
   o.travel_u = d.travel_u, o.travel_bl = d.travel_bl, o.status = static_cast<sim::Status>(d.status);
   o.grad = std::move(d.grad);
+  o.redone_in_double = d.redone_in_double != 0;
   return o;
 }
 
@@ -93,7 +95,7 @@ class ConnectorsPlan : public Plan {
     const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
                                 weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
     const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, ro, nullptr);
-    return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad};
+    return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad, static_cast<uint8_t>(o.redone_in_double)};
   }
   // row `row` of each group's (rows × columns) dataset <group>/<name>, from per-slot values
   Records slot_row(const std::string& name, int rows, int row, const std::vector<double>& per_slot) const {
@@ -127,12 +129,16 @@ class ConnectorsPlan : public Plan {
     for (int c = 0; c < N_; ++c) r.rows.push_back(c);
     return r;
   }
-  // numerical trouble a step leaves out: pairs whose episode ran (status ok) but whose gradient was not finite,
-  // reported with where (they count in nan_pairs; one of them would have made the slot's weights NaN)
-  void report_bad_gradients(int it, int c, int n) const {
-    if (n == 0) return;
-    std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) ran but their gradient was not finite; left out of "
-                 "the step (counted in nan_pairs)\n", slots_[c].group.c_str(), slots_[c].column, it + 1, n);
+  // numerical trouble, reported with where: pairs whose episode ran (status ok) but whose gradient was not
+  // finite are left out of the step (they count in nan_pairs; one of them would have made the slot's weights
+  // NaN); with run.precision = "float_networks", pairs whose float gradient overflowed were run again in double
+  void report_bad_gradients(int it, int c, int n, int redone) const {
+    if (n > 0)
+      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) ran but their gradient was not finite; left out of "
+                   "the step (counted in nan_pairs)\n", slots_[c].group.c_str(), slots_[c].column, it + 1, n);
+    if (redone > 0)
+      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) had a float gradient beyond float's range; "
+                   "run again with the networks in double\n", slots_[c].group.c_str(), slots_[c].column, it + 1, redone);
   }
   Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
     Records out = slot_row("curve_u", I_, it, cu);
@@ -202,7 +208,7 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     for (int c = 0; c < N_; ++c) {
       collective::ProbeResult r = sums_[c].mean();
       nn_[c] = r.not_ok;
-      report_bad_gradients(it, c, r.bad_grad);
+      report_bad_gradients(it, c, r.bad_grad, r.redone);
       if (r.ok == 0) continue;
       cu_[c] = r.travel_u;
       cb_[c] = r.travel_bl;
@@ -336,15 +342,15 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
     vscore_.assign(N_, kNaN);
     size_t q = 0;
     for (int c = 0; c < N_; ++c) {
-      int bad_grad = 0;
+      int bad_grad = 0, redone = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
         collective::ProbeSum sum;
         for (int p = 0; p < counts_[c][w]; ++p, ++q) sum.add(outcome(done_[q]));
-        bad_grad += sum.bad_grad;
+        bad_grad += sum.bad_grad, redone += sum.redone;
         if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;
         else results[c].push_back(sum.mean());
       }
-      report_bad_gradients(it, c, bad_grad);
+      report_bad_gradients(it, c, bad_grad, redone);
     }
     Records out;
     if (it < I_) {

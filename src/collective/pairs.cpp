@@ -43,6 +43,7 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
   o.travel_u = r.travel;
   o.travel_bl = r.travel / (0.5 * (body_length(P) + body_length(A)));
   if (opt.grad) o.grad = std::move(r.grad_connector_params);
+  o.redone_in_double = r.redone_in_double;
   if (full) *full = std::move(r);
   return o;
 }

@@ -22,6 +22,7 @@ struct PairOutcome {
   double travel_bl = 0;        // travel_u / mean body length of the two agents
   sim::Status status = sim::Status::ok;
   std::vector<double> grad;    // d travel_u / d connector params (with grad; zeros unless ok)
+  bool redone_in_double = false;  // float networks: their gradient overflowed, so the episode ran again in double
 };
 
 // one pair episode: `posterior` left, `anterior` right, joined by the connector `params`

@@ -39,6 +39,7 @@ double scheduled_lr(const OptSettings& s, int it, int iterations) {
 }
 
 void ProbeSum::add(const PairOutcome& o) {
+  redone += o.redone_in_double ? 1 : 0;
   if (o.status != sim::Status::ok || !std::isfinite(o.travel_u)) {
     ++not_ok;
     return;
@@ -58,7 +59,7 @@ void ProbeSum::add(const PairOutcome& o) {
 
 ProbeResult ProbeSum::mean() const {
   ProbeResult r;
-  r.ok = ok, r.not_ok = not_ok, r.bad_grad = bad_grad;
+  r.ok = ok, r.not_ok = not_ok, r.bad_grad = bad_grad, r.redone = redone;
   r.travel_u = ok ? su / ok : kNaN;
   r.travel_bl = ok ? sb / ok : kNaN;
   r.grad = g;

@@ -66,6 +66,7 @@ struct ProbeResult {
   double travel_u = 0, travel_bl = 0;  // means over the ok pairs (NaN if none)
   int ok = 0, not_ok = 0;
   int bad_grad = 0;          // of not_ok: pairs whose episode was ok but whose gradient was not finite
+  int redone = 0;            // pairs whose float gradient overflowed and that were run again in double
   std::vector<double> grad;  // mean d travel_u / d weights over the ok pairs (probes asked with grad)
 };
 // accumulates pair outcomes in pair order into a ProbeResult. A pair whose gradient is not finite (an episode that
@@ -73,7 +74,7 @@ struct ProbeResult {
 // otherwise turn the connector's weights into NaN at the next step
 struct ProbeSum {
   double su = 0, sb = 0;
-  int ok = 0, not_ok = 0, bad_grad = 0;
+  int ok = 0, not_ok = 0, bad_grad = 0, redone = 0;
   std::vector<double> g;
   void add(const PairOutcome& o);
   ProbeResult mean() const;

@@ -100,7 +100,28 @@ size_t Simulator::workspace_bytes() const {
   return b;
 }
 
-RunResult Simulator::run(const Scene& scene, const RunOptions& opt) { return impl_->run(scene, opt); }
+namespace {
+bool finite_gradients(const RunResult& r) {
+  for (const auto* v : {&r.grad_agent_params, &r.grad_connector_params, &r.grad_x0, &r.grad_rest_length})
+    for (double x : *v)
+      if (!std::isfinite(x)) return false;
+  return true;
+}
+}  // namespace
+
+// float_networks: float's range ends at 3.4e38, and the adjoint of a long episode can pass it where double's
+// does not (3 of 20 strong connectors of a paper-scale run had overflowing gradients): such an episode is
+// redone with the networks in double, so a caller gets a finite gradient whenever double would give one
+RunResult Simulator::run(const Scene& scene, const RunOptions& opt) {
+  RunResult r = impl_->run(scene, opt);
+  if (opt.float_networks && opt.grad && r.status == Status::ok && !finite_gradients(r)) {
+    RunOptions in_double = opt;
+    in_double.float_networks = false;
+    r = impl_->run(scene, in_double);
+    r.redone_in_double = true;
+  }
+  return r;
+}
 
 std::vector<RunResult> Simulator::run_batch(const std::vector<Scene>& scenes, const RunOptions& opt) {
   std::vector<RunResult> out;
@@ -115,7 +136,7 @@ std::vector<RunResult> Simulator::run_batch(const std::vector<Scene>& scenes, co
                                         << "), unlike scene 0's (" << f.n_masses() << ", " << f.n_springs()
                                         << ", " << f.n_agents() << ", " << f.n_connectors() << ")");
   }
-  for (const Scene& s : scenes) out.push_back(impl_->run(s, opt));
+  for (const Scene& s : scenes) out.push_back(run(s, opt));
   return out;
 }
 

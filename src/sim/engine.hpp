@@ -61,6 +61,8 @@ struct RunResult {
   int bad_mass = -1;              // the first offending mass
   std::string message;            // human-readable account of a non-ok status
   int substeps = 1;               // physics substeps per step that were used
+  bool redone_in_double = false;  // float_networks with grad: float's gradient was not finite (its range ends at
+                                  // 3.4e38), so the episode was run again with the networks in double
 
   // contact events over the episode, counted per mass and substep (with grad only: read off the tape)
   struct ContactCounts {

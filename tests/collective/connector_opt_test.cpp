@@ -63,6 +63,22 @@ TEST(ConnectorOpt, APairWithANonFiniteGradientIsLeftOutAndCounted) {
   EXPECT_TRUE(std::isnan(only_bad.mean().travel_bl));
 }
 
+// a float pair whose gradient was redone in double (sim::RunResult::redone_in_double) is an ordinary ok pair
+// in the mean, and counted so that the connectors plan can say so
+TEST(ConnectorOpt, APairRedoneInDoubleCountsInTheMeanAndIsCounted) {
+  collective::PairOutcome a, b;
+  a.travel_u = 0.5, a.travel_bl = 2.0, a.grad = {1.0, -2.0};
+  b.travel_u = 0.3, b.travel_bl = 1.0, b.grad = {3.0, 4.0}, b.redone_in_double = true;
+  collective::ProbeSum sum;
+  sum.add(a), sum.add(b);
+  const ProbeResult r = sum.mean();
+  EXPECT_EQ(r.ok, 2);
+  EXPECT_EQ(r.not_ok, 0);
+  EXPECT_EQ(r.redone, 1);
+  EXPECT_EQ(r.travel_bl, 1.5);
+  EXPECT_EQ(r.grad, (std::vector<double>{2.0, 1.0}));
+}
+
 TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
   OptSettings s;
   s.lr = 0.01;

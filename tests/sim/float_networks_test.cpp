@@ -4,11 +4,14 @@
 // is as deterministic as double (taped and untaped runs, repeated runs: the same bits)
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "collective/builders.hpp"
 #include "io/environments.hpp"
+#include "io/scene_file.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
 
@@ -105,6 +108,38 @@ TEST(FloatNetworksDeterminism, TapedUntapedAndRepeatedRunsGiveTheSameBits) {
   EXPECT_EQ(std::memcmp(b.grad_connector_params.data(), c.grad_connector_params.data(),
                         sizeof(double) * b.grad_connector_params.size()),
             0);
+  EXPECT_FALSE(b.redone_in_double) << "an ordinary pair's float gradient is finite";
+}
+
+// float's range ends at 3.4e38. The scene: the float paper run's connectors stage rerun (README, 3b8fa66),
+// strong uniform-trained replicate 7's final connector joining agent 2 of the final population to its clone,
+// on flat: over 1000 steps (a training episode) its gradient reaches 7e43 in double, and the float pass
+// overflowed. Such an episode is redone with the networks in double: the caller gets double's finite result.
+TEST(FloatNetworksRange, AnEpisodeWhoseFloatGradientOverflowsIsRedoneInDouble) {
+  const sim::Scene s = io::read_scene(std::string(DIVCOLL_SOURCE_DIR) + "/tests/sim/data/float_overflow_pair.h5");
+  sim::Simulator sim;
+  sim::RunOptions opt;
+  opt.steps = 1000;
+  opt.grad = true;
+  opt.agent_param_grad = false;  // as connector training asks
+  opt.float_networks = true;
+  const sim::RunResult f = sim.run(s, opt);
+  opt.float_networks = false;
+  const sim::RunResult d = sim.run(s, opt);
+  ASSERT_EQ(d.status, sim::Status::ok);
+  double largest = 0;
+  for (double g : d.grad_connector_params) largest = std::max(largest, std::abs(g));
+  ASSERT_TRUE(std::isfinite(largest));
+  EXPECT_GT(largest, std::numeric_limits<float>::max()) << "the scene no longer needs more than float's range";
+  EXPECT_TRUE(f.redone_in_double);
+  EXPECT_FALSE(d.redone_in_double);
+  ASSERT_EQ(f.status, sim::Status::ok);
+  EXPECT_EQ(std::memcmp(&f.travel, &d.travel, sizeof(double)), 0);
+  ASSERT_EQ(f.grad_connector_params.size(), d.grad_connector_params.size());
+  EXPECT_EQ(std::memcmp(f.grad_connector_params.data(), d.grad_connector_params.data(),
+                        sizeof(double) * d.grad_connector_params.size()),
+            0);
+  EXPECT_EQ(f.grad_x0, d.grad_x0);
 }
 
 }  // namespace
