@@ -7,7 +7,8 @@
 // A round is collective: every rank enters farm() (mpi/scheduler.hpp) with the same item count. The master
 // pushes each worker FarmOptions::depth blocks at once and answers every result with the next block, or,
 // once the items are out, with kRoundEnd (once per worker; messages from the master arrive in the order it
-// sent them, so no task follows it). The round ends when every item has a result on the master. Payloads
+// sent them, so no task of this round follows it; the next round's may, as the master can be ahead by rounds:
+// a worker matches nothing after its kRoundEnd). The round ends when every item has a result on the master. Payloads
 // are binary archives of plain data (collective::Agent, evo::TrainResult, ...) defined below.
 #pragma once
 

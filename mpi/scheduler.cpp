@@ -562,12 +562,16 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
   Sender sender(comm);
   Receiver receiver;
   bool got_end = false;
+  bool end_matched = false;  // this farm's kRoundEnd has been matched: what comes after it is the next farm's
   Backoff backoff;
   Clock::time_point idle_since{};
   bool was_idle = false;
   for (;;) {
     bool active = false;
-    for (;;) {  // tasks (matched in the order the master sent them; nothing follows kRoundEnd)
+    // tasks, matched in the order the master sent them, up to this farm's kRoundEnd and no further: the master
+    // may already be in the next farm (its broadcast of the item count completes without us), and a message
+    // matched here belongs to this farm (tests/mpi/scheduler_test.cpp, AWorkerLateForAFarmTakesOnlyThatFarmsMessages)
+    while (!end_matched) {
       int flag = 0;
       MPI_Message msg;
       MPI_Status st;
@@ -575,6 +579,7 @@ void serve_worker(MPI_Comm comm, const std::function<std::string(const std::stri
       if (!flag) break;
       active = true;
       trace().add('T', 0);
+      end_matched = st.MPI_TAG == kRoundEnd;
       receiver.receive(msg, st);
     }
     for (const auto& m : receiver.take()) {
