@@ -154,6 +154,11 @@ class AgentsPlan final : public Plan {
   // the pool (parents, then the new agents), its selection, and its rows
   Records end_round(int g) override {
     std::vector<evo::Individual> pool = g == 0 ? std::vector<evo::Individual>{} : population_;
+    for (const auto& x : trained_)  // numerical trouble, said where it happened (its training stopped there)
+      if (x.train.nonfinite_gradient_epoch >= 0)
+        std::fprintf(stderr, "%s: generation %d: agent %lld: gradient not finite at epoch %d of %d; its training stopped there\n",
+                     spec_.label.c_str(), g, static_cast<long long>(x.id), x.train.nonfinite_gradient_epoch,
+                     A_.epochs);
     for (auto& x : trained_) pool.push_back(std::move(x));
     // training times beside the pool (a parent's unknown after a resume: 0)
     std::vector<double> pool_s(pool.size() - trained_s_.size(), 0.0);

@@ -145,7 +145,7 @@ void serialize(Ar& ar, divcoll::collective::Agent& a, unsigned) {
 
 template <class Ar>
 void serialize(Ar& ar, divcoll::evo::TrainResult& r, unsigned) {
-  ar & r.travel_u & r.fitness_bl & r.status & r.curve_u;
+  ar & r.travel_u & r.fitness_bl & r.status & r.curve_u & r.nonfinite_gradient_epoch;
 }
 
 template <class Ar>

@@ -109,9 +109,37 @@ double norm(const std::vector<double>& v) {
 
 }  // namespace
 
+bool step_agent(collective::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
+                const GdOptions& opt, Adam& adam, int epoch) {
+  for (const std::vector<double>* g : {&g_params, &g_rest})
+    for (double x : *g)
+      if (!std::isfinite(x)) return false;
+  const size_t P = a.params.size();
+  DIVCOLL_DEMAND(g_params.size() == P && g_rest.size() == a.rest_pos.size());
+  // weights: a normalized ascent step, or Adam
+  const double gn = norm(g_params);
+  if (opt.rule == GdRule::adam) {
+    std::vector<double> loss_grad(P);
+    for (size_t q = 0; q < P; ++q) loss_grad[q] = -g_params[q];
+    adam.step(a.params, std::move(loss_grad), opt.adam_lr, std::numeric_limits<double>::infinity(), epoch + 1);
+  } else if (gn > 0) {
+    for (size_t q = 0; q < P; ++q) a.params[q] += opt.step * g_params[q] / gn;
+  }
+  // rest positions: the mass with the largest gradient moves rest_move_max
+  if (opt.rest_moves) {
+    double gmax = 0;
+    for (int q = 0; q < sim::kAgentMasses; ++q) gmax = std::max(gmax, std::hypot(g_rest[2 * q], g_rest[2 * q + 1]));
+    if (gmax > 0) {
+      std::vector<double> delta(g_rest.size());
+      for (size_t q = 0; q < delta.size(); ++q) delta[q] = opt.rest_move_max * g_rest[q] / gmax;
+      move_rest_positions(a, delta, opt);
+    }
+  }
+  return true;
+}
+
 TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim) {
   TrainResult out;
-  const size_t P = a.params.size();
   Adam adam;  // ascent on travel: descent on −travel
   collective::Agent best = a;
   double best_travel = -std::numeric_limits<double>::infinity();
@@ -124,24 +152,11 @@ TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulat
     if (e.status != sim::Status::ok) break;  // keep what we had before this step
     if (e.travel > best_travel) best_travel = e.travel, best = a;
     if (!update) break;
-    // weights: a normalized ascent step, or Adam
-    const double gn = norm(e.g_params);
-    if (opt.rule == GdRule::adam) {
-      std::vector<double> loss_grad(P);
-      for (size_t q = 0; q < P; ++q) loss_grad[q] = -e.g_params[q];
-      adam.step(a.params, std::move(loss_grad), opt.adam_lr, std::numeric_limits<double>::infinity(), epoch + 1);
-    } else if (gn > 0) {
-      for (size_t q = 0; q < P; ++q) a.params[q] += opt.step * e.g_params[q] / gn;
-    }
-    // rest positions: the mass with the largest gradient moves rest_move_max
-    if (opt.rest_moves) {
-      double gmax = 0;
-      for (int q = 0; q < sim::kAgentMasses; ++q) gmax = std::max(gmax, std::hypot(e.g_rest[2 * q], e.g_rest[2 * q + 1]));
-      if (gmax > 0) {
-        std::vector<double> delta(e.g_rest.size());
-        for (size_t q = 0; q < delta.size(); ++q) delta[q] = opt.rest_move_max * e.g_rest[q] / gmax;
-        move_rest_positions(a, delta, opt);
-      }
+    // a gradient that is not finite stops training here, as an episode that was not ok does (before, a
+    // normalized step by an infinite norm made the weights NaN, and NaN norms skipped steps without a word)
+    if (!step_agent(a, e.g_params, e.g_rest, opt, adam, epoch)) {
+      out.nonfinite_gradient_epoch = epoch;
+      break;
     }
   }
   // the paper's rule keeps the last parameters; the others the best seen

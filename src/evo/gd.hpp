@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "collective/builders.hpp"
+#include "evo/optim.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll::evo {
@@ -35,7 +36,10 @@ struct TrainResult {
   double travel_u = 0;             // travel of the kept parameters, u
   double fitness_bl = 0;           // travel_u / body length
   sim::Status status = sim::Status::ok;
-  std::vector<double> curve_u;     // travel at each evaluation, epochs + 1 values (NaN where not ok)
+  std::vector<double> curve_u;     // travel at each evaluation, epochs + 1 values (fewer if training stopped)
+  // the first epoch whose gradient (of the weights or the rest positions) was not finite though its episode
+  // ran: training stopped there, before any step from it, as after an episode that was not ok; -1: none
+  int nonfinite_gradient_epoch = -1;
 };
 
 // body length of an agent (max x − min x of its rest positions), u
@@ -47,6 +51,12 @@ std::vector<double> rest_gradient(const collective::Agent& a, const sim::RunResu
 
 // trains `a` in place and returns its fitness; `sim` is reused workspace
 TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim);
+
+// one epoch's update of `a` from the gradient of travel w.r.t. its weights (`g_params`) and rest positions
+// (`g_rest`, 11×2), by opt.rule (`adam` holds Adam's moments, `epoch` counts from 0); returns false and leaves
+// `a` untouched if either gradient has a value that is not finite
+bool step_agent(collective::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
+                const GdOptions& opt, Adam& adam, int epoch);
 
 // moves rest positions by `delta` (11×2) if every rest length stays within the bounds (halving the move
 // up to 4 times otherwise), then shifts so that min x = min y = 0; returns whether it moved

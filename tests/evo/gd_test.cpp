@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "collective/builders.hpp"
 #include "common/check.hpp"
@@ -111,6 +113,40 @@ TEST(GdTrain, KeepBestNeverFallsBelowUntrainedAndUsuallyImproves) {
     EXPECT_EQ(travel_of(a, opt.steps), r.travel_u) << "seed " << seed;
   }
   EXPECT_GT(improved, n / 2) << "training improved only " << improved << " of " << n << " agents";
+}
+
+// a gradient with a value that is not finite is no step: step_agent refuses it and leaves the agent as it was
+// (an infinite norm had made every weight NaN, and a NaN norm skipped the step without a word); a finite one
+// moves the weights and the rest positions, by every rule
+TEST(GdStep, AGradientThatIsNotFiniteLeavesTheAgentUntouched) {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::adam, evo::GdRule::paper}) {
+    const evo::GdOptions opt = short_opts(4, 100, rule);
+    const collective::Agent a0 = agent(5);
+    std::vector<double> gp(a0.params.size()), gr(a0.rest_pos.size());
+    for (size_t q = 0; q < gp.size(); ++q) gp[q] = std::sin(0.7 * static_cast<double>(q) + 0.3);
+    for (size_t q = 0; q < gr.size(); ++q) gr[q] = 0.01 * std::cos(1.3 * static_cast<double>(q));
+    const std::string what = evo::gd_rule_name(rule);
+    for (int bad = 0; bad < 4; ++bad) {
+      std::vector<double> p = gp, r = gr;
+      if (bad == 0) p[3] = inf;
+      if (bad == 1) p[0] = nan;
+      if (bad == 2) r[5] = -inf;
+      if (bad == 3) r[1] = nan;
+      collective::Agent a = a0;
+      evo::Adam adam;
+      EXPECT_FALSE(evo::step_agent(a, p, r, opt, adam, 0)) << what << " case " << bad;
+      EXPECT_EQ(a.params, a0.params) << what << " case " << bad;
+      EXPECT_EQ(a.rest_pos, a0.rest_pos) << what << " case " << bad;
+      EXPECT_TRUE(adam.m.empty()) << what << " case " << bad << ": Adam's moments took the step";
+    }
+    collective::Agent a = a0;
+    evo::Adam adam;
+    EXPECT_TRUE(evo::step_agent(a, gp, gr, opt, adam, 0)) << what;
+    EXPECT_NE(a.params, a0.params) << what;
+    EXPECT_NE(a.rest_pos, a0.rest_pos) << what;
+    for (double x : a.params) ASSERT_TRUE(std::isfinite(x)) << what;
+  }
 }
 
 TEST(GdTrain, KeepBestAndAdamReturnTheCurveMaximumPaperTheLastEvaluation) {
