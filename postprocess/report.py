@@ -160,7 +160,7 @@ def scale_section(run):
                    f"the run file `{os.path.basename(run)}` only; it is not the paper-scale report. Claims are judged "
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
                    "the count that is short. The paper-scale report, from one run file of `configs/paper.toml` with "
-                   "every stage (seed 1, 2 h 20 min on 2 cores), is in the repository at "
+                   "every stage (seed 1, 1 h 59 min on 2 cores), is in the repository at "
                    "`postprocess/gallery/paper_seed1/report.md`; the README's \"Results at paper scale\" "
                    "summarises it.")
     else:
