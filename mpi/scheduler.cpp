@@ -438,6 +438,14 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
   Backoff backoff;
   for (;;) {
     bool active = false;
+    // Open MPI's probe (ob1) looks among the messages already matched in and only then advances its
+    // transports, so a result that arrived during a nap would be seen one look later (measured: the master
+    // took a tail result in 1.0-1.8 ms after it was sent, looking every 1.1 ms; 0.6 ms with this): advance
+    // first with a probe whose answer is not used, then take everything in
+    {
+      int ignored = 0;
+      MPI_Iprobe(MPI_ANY_SOURCE, kResult, comm, &ignored, MPI_STATUS_IGNORE);
+    }
     // every result that has arrived is answered at once with the worker's next block
     for (;;) {
       int flag = 0;

@@ -1,0 +1,70 @@
+// writing rows of a dataset (io/h5.hpp Node::write_rows): a run of consecutive rows goes out as one block with
+// a memory space of its shape, other row sets as a union of single rows; either way each row's values land in
+// that row, rows not written keep what they had, and rows out of range are refused.
+#include "io/h5.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/check.hpp"
+
+namespace divcoll::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// the value of element (row, a, b) of a 6 × 2 × 3 dataset in these tests
+double value(int64_t row, int a, int b, double base) { return base + 100.0 * row + 10.0 * a + b; }
+
+std::vector<double> packed_rows(const std::vector<int64_t>& rows, double base) {
+  std::vector<double> v;
+  for (int64_t r : rows)
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 3; ++b) v.push_back(value(r, a, b, base));
+  return v;
+}
+
+TEST(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
+  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_rows_" + std::to_string(::getpid()) + ".h5");
+  const h5::Dims dims = {6, 2, 3};
+  {
+    h5::File f = h5::File::create(path.string(), true);
+    // every row (one run), then a run in the middle, then rows that are not a run
+    f.write_rows<double>("g/x", dims, {0, 1, 2, 3, 4, 5}, packed_rows({0, 1, 2, 3, 4, 5}, 0.0));
+    f.write_rows<double>("g/x", dims, {2, 3, 4}, packed_rows({2, 3, 4}, 0.5));
+    f.write_rows<double>("g/x", dims, {0, 5}, packed_rows({0, 5}, 0.25));
+    // a single row, and no rows at all (a rank with nothing to write)
+    f.write_rows<double>("g/x", dims, {1}, packed_rows({1}, 0.125));
+    f.write_rows<double>("g/x", dims, {}, {});
+    f.close();
+  }
+  h5::File f = h5::File::open(path.string());
+  const std::vector<double> all = f.read<double>("g/x", dims);
+  const double base[6] = {0.25, 0.125, 0.5, 0.5, 0.5, 0.25};
+  ASSERT_EQ(all.size(), 36u);
+  for (int64_t r = 0; r < 6; ++r)
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 3; ++b) EXPECT_EQ(all[(r * 2 + a) * 3 + b], value(r, a, b, base[r])) << r << " " << a << " " << b;
+  f.close();
+  fs::remove(path);
+}
+
+TEST(H5WriteRows, RowsOutOfRangeAreRefused) {
+  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_range_" + std::to_string(::getpid()) + ".h5");
+  {
+    h5::File f = h5::File::create(path.string(), true);
+    const h5::Dims dims = {6, 2, 3};
+    EXPECT_THROW(f.write_rows<double>("g/x", dims, {5, 6}, packed_rows({5, 6}, 0.0)), InputError);   // a run
+    EXPECT_THROW(f.write_rows<double>("g/y", dims, {-1, 0}, packed_rows({-1, 0}, 0.0)), InputError);  // a run
+    EXPECT_THROW(f.write_rows<double>("g/z", dims, {0, 7}, packed_rows({0, 7}, 0.0)), InputError);   // not a run
+    f.close();
+  }
+  fs::remove(path);
+}
+
+}  // namespace
+}  // namespace divcoll::io
