@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <numeric>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -446,15 +447,35 @@ void Node::write(const std::string& path, const std::vector<T>& data, const Dims
 }
 
 template <class T>
-void Node::write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows,
-                      const std::vector<T>& packed) const {
+void Node::write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows_given,
+                      const std::vector<T>& packed_given) const {
   note("write_rows", path);
   const std::string w = where(path);
   if (dims.empty()) throw InputError(w + ": write_rows needs at least one dimension");
   const hsize_t row_size = product(dims) / std::max<hsize_t>(dims[0], 1);
-  if (packed.size() != rows.size() * row_size)
-    throw InputError(w + ": " + std::to_string(packed.size()) + " values do not fill " +
-                     std::to_string(rows.size()) + " rows of " + dims_string(dims));
+  if (packed_given.size() != rows_given.size() * row_size)
+    throw InputError(w + ": " + std::to_string(packed_given.size()) + " values do not fill " +
+                     std::to_string(rows_given.size()) + " rows of " + dims_string(dims));
+  // HDF5 fills a selection in the file's order, so rows not given in ascending order are sorted, their values
+  // with them (else row 5's values would land in row 1 for rows {5, 1}); a row given twice is refused
+  std::vector<int64_t> sorted_rows;
+  std::vector<T> sorted_packed;
+  const bool ascending = std::is_sorted(rows_given.begin(), rows_given.end());
+  if (!ascending) {
+    std::vector<size_t> order(rows_given.size());
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return rows_given[a] < rows_given[b]; });
+    sorted_packed.reserve(packed_given.size());
+    for (size_t k : order) {
+      sorted_rows.push_back(rows_given[k]);
+      sorted_packed.insert(sorted_packed.end(), packed_given.begin() + static_cast<std::ptrdiff_t>(k * row_size),
+                           packed_given.begin() + static_cast<std::ptrdiff_t>((k + 1) * row_size));
+    }
+  }
+  const std::vector<int64_t>& rows = ascending ? rows_given : sorted_rows;
+  const std::vector<T>& packed = ascending ? packed_given : sorted_packed;
+  if (std::adjacent_find(rows.begin(), rows.end()) != rows.end())
+    throw InputError(w + ": a row is given twice");
   Handle fspace(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
   if (!fspace.valid()) fail(w, "cannot make a dataspace of dims " + dims_string(dims));
   // creation is collective: every rank of the file's communicator calls this; an existing dataset of the

@@ -115,9 +115,9 @@ class Node {
   template <class T>
   void write(const std::string& path, const std::vector<T>& data, const Dims& dims) const;
   // creates dataset `path` of `dims` and writes the rows (first index) listed in `rows` from `packed`
-  // (those rows one after the other); an existing dataset of the same dims is written in place. With an
-  // MPI-IO file every rank calls it (creation is collective), each with the rows it holds, possibly none,
-  // and the transfer is collective.
+  // (those rows one after the other, in any order; a row given twice is refused); an existing dataset of the
+  // same dims is written in place. With an MPI-IO file every rank calls it (creation is collective), each
+  // with the rows it holds, possibly none, and the transfer is collective.
   template <class T>
   void write_rows(const std::string& path, const Dims& dims, const std::vector<int64_t>& rows,
                   const std::vector<T>& packed) const;

@@ -1,6 +1,7 @@
 // writing rows of a dataset (io/h5.hpp Node::write_rows): a run of consecutive rows goes out as one block with
-// a memory space of its shape, other row sets as a union of single rows; either way each row's values land in
-// that row, rows not written keep what they had, and rows out of range are refused.
+// a memory space of its shape, other row sets as a union of single rows, rows given out of order are sorted with
+// their values; either way each row's values land in that row, rows not written keep what they had, and rows
+// out of range or given twice are refused.
 #include "io/h5.hpp"
 
 #include <gtest/gtest.h>
@@ -61,6 +62,37 @@ TEST(H5WriteRows, RowsOutOfRangeAreRefused) {
     EXPECT_THROW(f.write_rows<double>("g/x", dims, {5, 6}, packed_rows({5, 6}, 0.0)), InputError);   // a run
     EXPECT_THROW(f.write_rows<double>("g/y", dims, {-1, 0}, packed_rows({-1, 0}, 0.0)), InputError);  // a run
     EXPECT_THROW(f.write_rows<double>("g/z", dims, {0, 7}, packed_rows({0, 7}, 0.0)), InputError);   // not a run
+    f.close();
+  }
+  fs::remove(path);
+}
+
+
+TEST(H5WriteRows, RowsGivenOutOfOrderLandInTheirRows) {
+  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_order_" + std::to_string(::getpid()) + ".h5");
+  const h5::Dims dims = {6, 2, 3};
+  {
+    h5::File f = h5::File::create(path.string(), true);
+    f.write_rows<double>("g/x", dims, {0, 1, 2, 3, 4, 5}, packed_rows({0, 1, 2, 3, 4, 5}, 0.0));
+    f.write_rows<double>("g/x", dims, {5, 0, 3}, packed_rows({5, 0, 3}, 0.5));
+    f.close();
+  }
+  h5::File f = h5::File::open(path.string());
+  const std::vector<double> all = f.read<double>("g/x", dims);
+  const double base[6] = {0.5, 0.0, 0.0, 0.5, 0.0, 0.5};
+  for (int64_t r = 0; r < 6; ++r)
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 3; ++b) EXPECT_EQ(all[(r * 2 + a) * 3 + b], value(r, a, b, base[r])) << r << " " << a << " " << b;
+  f.close();
+  fs::remove(path);
+}
+
+
+TEST(H5WriteRows, ARowGivenTwiceIsRefused) {
+  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_twice_" + std::to_string(::getpid()) + ".h5");
+  {
+    h5::File f = h5::File::create(path.string(), true);
+    EXPECT_THROW(f.write_rows<double>("g/x", {6, 2, 3}, {3, 1, 3}, packed_rows({3, 1, 3}, 0.0)), InputError);
     f.close();
   }
   fs::remove(path);
