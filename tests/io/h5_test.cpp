@@ -29,6 +29,17 @@ std::vector<double> packed_rows(const std::vector<int64_t>& rows, double base) {
   return v;
 }
 
+// reads back the 6 × 2 × 3 dataset g/x of the file at `path` and expects row r to hold value(r, ·, ·, base[r])
+void expect_rows(const fs::path& path, const double (&base)[6]) {
+  h5::File f = h5::File::open(path.string());
+  const std::vector<double> all = f.read<double>("g/x", h5::Dims{6, 2, 3});
+  ASSERT_EQ(all.size(), 36u);
+  for (int64_t r = 0; r < 6; ++r)
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 3; ++b) EXPECT_EQ(all[(r * 2 + a) * 3 + b], value(r, a, b, base[r])) << r << " " << a << " " << b;
+  f.close();
+}
+
 TEST(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
   const fs::path path = fs::temp_directory_path() / ("divcoll_h5_rows_" + std::to_string(::getpid()) + ".h5");
   const h5::Dims dims = {6, 2, 3};
@@ -43,14 +54,7 @@ TEST(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
     f.write_rows<double>("g/x", dims, {}, {});
     f.close();
   }
-  h5::File f = h5::File::open(path.string());
-  const std::vector<double> all = f.read<double>("g/x", dims);
-  const double base[6] = {0.25, 0.125, 0.5, 0.5, 0.5, 0.25};
-  ASSERT_EQ(all.size(), 36u);
-  for (int64_t r = 0; r < 6; ++r)
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 3; ++b) EXPECT_EQ(all[(r * 2 + a) * 3 + b], value(r, a, b, base[r])) << r << " " << a << " " << b;
-  f.close();
+  expect_rows(path, {0.25, 0.125, 0.5, 0.5, 0.5, 0.25});
   fs::remove(path);
 }
 
@@ -67,7 +71,6 @@ TEST(H5WriteRows, RowsOutOfRangeAreRefused) {
   fs::remove(path);
 }
 
-
 TEST(H5WriteRows, RowsGivenOutOfOrderLandInTheirRows) {
   const fs::path path = fs::temp_directory_path() / ("divcoll_h5_order_" + std::to_string(::getpid()) + ".h5");
   const h5::Dims dims = {6, 2, 3};
@@ -77,16 +80,9 @@ TEST(H5WriteRows, RowsGivenOutOfOrderLandInTheirRows) {
     f.write_rows<double>("g/x", dims, {5, 0, 3}, packed_rows({5, 0, 3}, 0.5));
     f.close();
   }
-  h5::File f = h5::File::open(path.string());
-  const std::vector<double> all = f.read<double>("g/x", dims);
-  const double base[6] = {0.5, 0.0, 0.0, 0.5, 0.0, 0.5};
-  for (int64_t r = 0; r < 6; ++r)
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 3; ++b) EXPECT_EQ(all[(r * 2 + a) * 3 + b], value(r, a, b, base[r])) << r << " " << a << " " << b;
-  f.close();
+  expect_rows(path, {0.5, 0.0, 0.0, 0.5, 0.0, 0.5});
   fs::remove(path);
 }
-
 
 TEST(H5WriteRows, ARowGivenTwiceIsRefused) {
   const fs::path path = fs::temp_directory_path() / ("divcoll_h5_twice_" + std::to_string(::getpid()) + ".h5");
