@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/aligned.hpp"
 #include "common/check.hpp"
 #include "sim/model.hpp"
 #include "sim/stages.hpp"
@@ -33,21 +34,23 @@ struct Simulator::Impl {
   Model model;
 
   // tape (grad) or rolling state (no grad). Substep states k = 0 .. T·n
-  std::vector<double> xs, vs;          // (states × N × 2)
+  LineVector<double> xs, vs;           // (states × N × 2)
   std::vector<uint8_t> taus;           // (states × N)
-  std::vector<double> vps;             // (T·n × N × 2) v' per substep (grad only)
+  LineVector<double> vps;              // (T·n × N × 2) v' per substep (grad only)
   std::vector<ContactRecord> recs;     // (T·n × N) (grad only)
-  std::vector<double> os;              // (T × S) o'_t after control (grad) or (S) rolling
-  std::vector<double> agent_acts;      // (T × A × agent acts) (grad) or one step
-  std::vector<double> conn_acts;       // (T × conn acts × 5C) (grad) or one step
-  std::vector<float> agent_acts_f, conn_acts_f, scratch_f;  // the same with RunOptions::float_networks
-  std::vector<float> g_agent_f, g_conn_f;  // float_networks: parameter gradients of the last few steps, in float
+  LineVector<double> os;               // (T × S) o'_t after control (grad) or (S) rolling
+  LineVector<double> agent_acts;       // (T × A × agent acts) (grad) or one step
+  LineVector<double> conn_acts;        // (T × conn acts × 5C) (grad) or one step
+  LineVector<float> agent_acts_f, conn_acts_f, scratch_f;  // the same with RunOptions::float_networks
+  LineVector<float> g_agent_f, g_conn_f;  // float_networks: parameter gradients of the last few steps, in float
+  // the parameter gradients, summed here (on whole cache lines, as the kernels want them) and copied out
+  LineVector<double> g_agent, g_conn;
 
-  // scratch
-  std::vector<double> F, Fb, vpb, xb, vb, xb2, vb2, ob, Lb, scratch;
+  // scratch (every buffer here starts on a cache line: common/aligned.hpp says why)
+  LineVector<double> F, Fb, vpb, xb, vb, xb2, vb2, ob, Lb, scratch;
 
-  template <class T>
-  static void fit(std::vector<T>& v, size_t n) {
+  template <class V>
+  static void fit(V& v, size_t n) {
     if (v.size() < n) v.resize(n);
   }
 
@@ -279,11 +282,12 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   if (!opt.grad) return res;
 
   // ---- backward ------------------------------------------------------------------------------------
-  if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
-  res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
+  g_agent.assign(opt.agent_param_grad ? static_cast<size_t>(m.A) * m.agent_params : 0, 0.0);
+  g_conn.assign(m.C > 0 ? m.conn_params : 0, 0.0);
   res.grad_rest_length.assign(S, 0.0);
   double* Lbar = res.grad_rest_length.data();
-  double* gc = m.C > 0 ? res.grad_connector_params.data() : nullptr;
+  double* ga = opt.agent_param_grad ? g_agent.data() : nullptr;
+  double* gc = m.C > 0 ? g_conn.data() : nullptr;
   // seed: ∂travel/∂x_T = (1/N, 0)
   double* xbar = xb.data();
   double* vbar = vb.data();
@@ -303,10 +307,10 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
     g_conn_f.assign(m.C > 0 ? m.conn_params : 0, 0.0f);
   }
   auto flush_float_grads = [&] {
-    auto add = [](std::vector<float>& f, double* into) {
+    auto add = [](LineVector<float>& f, double* into) {
       for (size_t q = 0; q < f.size(); ++q) into[q] += f[q], f[q] = 0.0f;
     };
-    if (!g_agent_f.empty()) add(g_agent_f, res.grad_agent_params.data());
+    if (!g_agent_f.empty()) add(g_agent_f, ga);
     if (!g_conn_f.empty()) add(g_conn_f, gc);
   };
   // the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from
@@ -353,8 +357,7 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       if (t % kFloatGradSteps == 0) flush_float_grads();
     } else {
       control_adjoint(m, t, sx(k), sv(k), ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc},
-                      ob.data(), xbar, vbar, Lbar, opt.agent_param_grad ? res.grad_agent_params.data() : nullptr, gc,
-                      scratch.data());
+                      ob.data(), xbar, vbar, Lbar, ga, gc, scratch.data());
     }
     // truncated backpropagation: state t starts a window and ends the previous one, whose seed restarts here
     if (opt.grad_window > 0 && t > 0 && t % opt.grad_window == 0) {
@@ -364,6 +367,8 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
     }
   }
   if (fl) flush_float_grads();
+  if (opt.agent_param_grad) res.grad_agent_params.assign(g_agent.begin(), g_agent.end());
+  res.grad_connector_params.assign(g_conn.begin(), g_conn.end());
   // x0 is both the initial state and travel's baseline
   res.grad_x0.assign(xbar, xbar + N2);
   for (int i = 0; i < N; ++i) res.grad_x0[2 * i] -= 1.0 / N;

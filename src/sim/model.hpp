@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/aligned.hpp"
 #include "nn/mlp.hpp"
 #include "sim/scene.hpp"
 
@@ -40,10 +41,10 @@ struct Model {
   // the controllers' weights packed for the MLP kernels (nn::pack): A × nn::packed_count(agent_layout), and
   // nn::packed_count(conn_layout) for the connectors' shared weights
   int agent_packed_count = 0;
-  std::vector<double> agent_packed, conn_packed;
+  LineVector<double> agent_packed, conn_packed;
   // the same weights rounded to float, packed for the float kernels (RunOptions::float_networks only; pack_float())
   int agent_packed_count_f = 0;
-  std::vector<float> agent_packed_f, conn_packed_f;
+  LineVector<float> agent_packed_f, conn_packed_f;
   // the packed weights for the kernels' scalar T
   template <class T>
   const T* agent_packed_for() const {
