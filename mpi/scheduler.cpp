@@ -76,24 +76,36 @@ double thread_cpu_s() {
 // doubling up to 2 ms, so a waiting rank costs its core under 1% and answers within 2 ms (a worker is
 // woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work).
 // A serving thread whose own computing thread has work, with no message of its own in flight, skips the ramp
-// and naps 2 ms (master) or 10 ms (worker) at once, woken when its item finishes (see `calm` in serve_master
-// and serve_worker): each wake-up takes the core from that computing thread, and the ramp from 20 µs after
-// every message had cost it 2-3% of its time
+// and naps at once (the master: half its mean item time, 2 to 10 ms; a worker: 10 ms), woken when its item
+// finishes (see `calm` in serve_master and serve_worker): each wake-up takes the core from that computing
+// thread, and the ramp from 20 µs after every message had cost it 2-3% of its time
 class Backoff {
  public:
   static constexpr int kMinUs = 20, kMaxUs = 2000;
   // the master's longest look-away in a round's tail, where a worker waits for its next item: at least
   // kTailUs; when the master computes items too, sqrt(2 × kWakeCostUs × its mean item time), at most kMaxUs.
-  // Each look takes the master's core from its computing thread for about kWakeCostUs (measured on a 2-core
-  // VM: looking every 200 µs made the master's 19 ms items 15% slower), and a worker waits half a look on
-  // average for each item of the tail; that interval balances the two losses.
-  static constexpr int kTailUs = 200, kWakeCostUs = 30;
+  // Each look takes the master's core from its computing thread for about kWakeCostUs, and a worker waits half
+  // a look on average for each item of the tail; that interval balances the two losses. kWakeCostUs: looking
+  // every 200 µs made the master's 19 ms items 15% slower (2-core VM, 2026-11), i.e. 30 µs a look. Measured
+  // again with the engine's buffers on cache lines (16d869b), the quick agents stage at 2 ranks (17 ms items,
+  // calm naps of 8 ms): 30 µs, 1.537 s (median of 7); 60 µs, 1.518 s (median of 4), the master's computing
+  // thread 1.42 s against its worker's 1.40 s
+  static constexpr int kTailUs = 200, kWakeCostUs = 60;
   static int tail_us(double mean_item_s) {
     if (!(mean_item_s > 0)) return kTailUs;
     return static_cast<int>(std::clamp(std::sqrt(2.0 * kWakeCostUs * mean_item_s * 1e6), double{kTailUs}, double{kMaxUs}));
   }
   // a calm worker's look-away: its computing thread has a block and wakes it when it finishes
   static constexpr int kCalmWorkerUs = 10000;
+  // a calm master's look-away: every worker holds a queued block behind the one it computes, so a result
+  // taken half an item later still comes before that worker runs dry; 2 ms when no item has finished yet.
+  // (the quick agents stage at 2 ranks, 5 rounds alternating: 2 ms calm naps and kWakeCostUs = 30, the stage
+  // 1.545-1.554 s, the master's computing thread 1.448-1.456 s, its serving thread 0.033 s of CPU; half an
+  // item and 60: 1.516-1.524 s, 1.419-1.424 s, 0.023 s; the worker's computing thread 1.39 s in both)
+  static int calm_master_us(double mean_item_s) {
+    if (!(mean_item_s > 0)) return kMaxUs;
+    return static_cast<int>(std::clamp(0.5 * mean_item_s * 1e6, double{kMaxUs}, double{kCalmWorkerUs}));
+  }
 
   void reset() { us_ = kMinUs; }
   // the next sleep, at most max_us (the doubling goes on up to kMaxUs regardless)
@@ -499,16 +511,16 @@ void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::str
     if (done == n && open_workers == 0 && !running) break;
     // calm: this core's computing thread is at work, nothing of ours is in flight and no worker waits for
     // its next item (the tail), so nothing here is urgent: the computing thread's next item wakes us, and a
-    // worker's result can wait 2 ms (it holds its next block)
+    // worker's result can wait half an item (it holds its next block)
     const bool calm = running && sender.empty() && receiver.empty() && !in_tail(n - next);
     if (active && !calm) {
       backoff.reset();
     } else {
       std::unique_lock lk(sh.mu);
       // in the round's tail a worker waits for its next item: look more often
-      const int tail_us = Backoff::tail_us(sh.own_items > 0 ? sh.own_s / static_cast<double>(sh.own_items) : 0.0);
-      const auto nap = calm ? std::chrono::microseconds(Backoff::kMaxUs)
-                            : backoff.next(in_tail(n - next) ? tail_us : Backoff::kMaxUs);
+      const double mean_item_s = sh.own_items > 0 ? sh.own_s / static_cast<double>(sh.own_items) : 0.0;
+      const auto nap = calm ? std::chrono::microseconds(Backoff::calm_master_us(mean_item_s))
+                            : backoff.next(in_tail(n - next) ? Backoff::tail_us(mean_item_s) : Backoff::kMaxUs);
       sh.to_server.wait_for(lk, nap, [&] { return local_new > 0 || sh.error || (!local_running && running); });
     }
   }
