@@ -29,11 +29,11 @@ struct Model {
   bool has_connectors = false;
 
   // terrain as separate arrays (K)
-  std::vector<double> seg_x, seg_y, seg_s;
+  LineVector<double> seg_x, seg_y, seg_s;
 
-  std::vector<double> inv_mass;  // (N)
+  LineVector<double> inv_mass;  // (N)
   // the springs stages' per-spring values between their two loops (4 × S); scratch, hence mutable
-  mutable std::vector<double> spring_scratch;
+  mutable LineVector<double> spring_scratch;
 
   // controllers
   nn::Layout agent_layout, conn_layout;
@@ -65,7 +65,7 @@ struct Model {
 
   // the agents' sine inputs sin(ω t Δt + 2π j / n_sines) of steps t < sine_steps (sine_steps × n_sines): the
   // same for every scene with the same constants, so kept across compiles and computed once per batch
-  std::vector<double> sines;
+  LineVector<double> sines;
   int sine_steps = 0;
 
   // compiles `s` (validated by the caller); reuses this model's buffers (the sine table too, if it still fits)
