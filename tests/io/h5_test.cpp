@@ -30,8 +30,8 @@ std::vector<double> packed_rows(const std::vector<int64_t>& rows, double base) {
 }
 
 // reads back the 6 × 2 × 3 dataset g/x of the file at `path` and expects row r to hold value(r, ·, ·, base[r])
-void expect_rows(const fs::path& path, const double (&base)[6]) {
-  h5::File f = h5::File::open(path.string());
+void expect_rows(const std::string& path, const double (&base)[6]) {
+  h5::File f = h5::File::open(path);
   const std::vector<double> all = f.read<double>("g/x", h5::Dims{6, 2, 3});
   ASSERT_EQ(all.size(), 36u);
   for (int64_t r = 0; r < 6; ++r)
@@ -40,11 +40,25 @@ void expect_rows(const fs::path& path, const double (&base)[6]) {
   f.close();
 }
 
-TEST(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
-  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_rows_" + std::to_string(::getpid()) + ".h5");
+// each test's files in a folder of its own, removed afterwards whatever the test did (as tests/io/run_file_test.cpp)
+class H5WriteRows : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("divcoll_h5_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+
+ private:
+  fs::path dir_;
+};
+
+TEST_F(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
+  const std::string file = path("rows.h5");
   const h5::Dims dims = {6, 2, 3};
   {
-    h5::File f = h5::File::create(path.string(), true);
+    h5::File f = h5::File::create(file, true);
     // every row (one run), then a run in the middle, then rows that are not a run
     f.write_rows<double>("g/x", dims, {0, 1, 2, 3, 4, 5}, packed_rows({0, 1, 2, 3, 4, 5}, 0.0));
     f.write_rows<double>("g/x", dims, {2, 3, 4}, packed_rows({2, 3, 4}, 0.5));
@@ -54,44 +68,40 @@ TEST(H5WriteRows, RunsOfRowsAndScatteredRowsLandInTheirRows) {
     f.write_rows<double>("g/x", dims, {}, {});
     f.close();
   }
-  expect_rows(path, {0.25, 0.125, 0.5, 0.5, 0.5, 0.25});
-  fs::remove(path);
+  expect_rows(file, {0.25, 0.125, 0.5, 0.5, 0.5, 0.25});
 }
 
-TEST(H5WriteRows, RowsOutOfRangeAreRefused) {
-  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_range_" + std::to_string(::getpid()) + ".h5");
+TEST_F(H5WriteRows, RowsOutOfRangeAreRefused) {
+  const std::string file = path("range.h5");
   {
-    h5::File f = h5::File::create(path.string(), true);
+    h5::File f = h5::File::create(file, true);
     const h5::Dims dims = {6, 2, 3};
     EXPECT_THROW(f.write_rows<double>("g/x", dims, {5, 6}, packed_rows({5, 6}, 0.0)), InputError);   // a run
     EXPECT_THROW(f.write_rows<double>("g/y", dims, {-1, 0}, packed_rows({-1, 0}, 0.0)), InputError);  // a run
     EXPECT_THROW(f.write_rows<double>("g/z", dims, {0, 7}, packed_rows({0, 7}, 0.0)), InputError);   // not a run
     f.close();
   }
-  fs::remove(path);
 }
 
-TEST(H5WriteRows, RowsGivenOutOfOrderLandInTheirRows) {
-  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_order_" + std::to_string(::getpid()) + ".h5");
+TEST_F(H5WriteRows, RowsGivenOutOfOrderLandInTheirRows) {
+  const std::string file = path("order.h5");
   const h5::Dims dims = {6, 2, 3};
   {
-    h5::File f = h5::File::create(path.string(), true);
+    h5::File f = h5::File::create(file, true);
     f.write_rows<double>("g/x", dims, {0, 1, 2, 3, 4, 5}, packed_rows({0, 1, 2, 3, 4, 5}, 0.0));
     f.write_rows<double>("g/x", dims, {5, 0, 3}, packed_rows({5, 0, 3}, 0.5));
     f.close();
   }
-  expect_rows(path, {0.5, 0.0, 0.0, 0.5, 0.0, 0.5});
-  fs::remove(path);
+  expect_rows(file, {0.5, 0.0, 0.0, 0.5, 0.0, 0.5});
 }
 
-TEST(H5WriteRows, ARowGivenTwiceIsRefused) {
-  const fs::path path = fs::temp_directory_path() / ("divcoll_h5_twice_" + std::to_string(::getpid()) + ".h5");
+TEST_F(H5WriteRows, ARowGivenTwiceIsRefused) {
+  const std::string file = path("twice.h5");
   {
-    h5::File f = h5::File::create(path.string(), true);
+    h5::File f = h5::File::create(file, true);
     EXPECT_THROW(f.write_rows<double>("g/x", {6, 2, 3}, {3, 1, 3}, packed_rows({3, 1, 3}, 0.0)), InputError);
     f.close();
   }
-  fs::remove(path);
 }
 
 }  // namespace
