@@ -29,6 +29,7 @@ namespace fs = std::filesystem;
 struct Variant {
   std::string name, doc;
   std::vector<std::string> set;
+  std::vector<std::uint64_t> seeds;  // the study seeds this variant runs at (empty: every one)
 };
 
 struct Study {
@@ -124,11 +125,25 @@ Study parse_study(const std::string& path) {
       if (key == "name") v.name = text_of(val, "variant.name");
       else if (key == "doc") v.doc = text_of(val, "variant.doc");
       else if (key == "set") v.set = strings(val, "variant.set");
-      else throw InputError(msg() << "unknown key variant." << key << " in " << path << " (known: name, set, doc)");
+      else if (key == "seeds") {
+        const toml::array* a = val.as_array();
+        DIVCOLL_THROW_UNLESS(a && !a->empty(), "variant.seeds must be a non-empty list of the study's seeds");
+        for (const toml::node& e : *a) {
+          DIVCOLL_THROW_UNLESS(e.is_integer() && e.as_integer()->get() >= 0,
+                               "variant.seeds must be a non-empty list of the study's seeds");
+          const auto sd = static_cast<std::uint64_t>(e.as_integer()->get());
+          DIVCOLL_THROW_UNLESS(std::find(v.seeds.begin(), v.seeds.end(), sd) == v.seeds.end(),
+                               "variant.seeds lists " << sd << " twice");
+          v.seeds.push_back(sd);
+        }
+      } else throw InputError(msg() << "unknown key variant." << key << " in " << path << " (known: name, set, seeds, doc)");
     }
     DIVCOLL_THROW_UNLESS(std::regex_match(v.name, ok_name),
                          "variant name '" << v.name << "' must be letters, digits, _ or - (it names a folder)");
     for (const Variant& o : s.variants) DIVCOLL_THROW_UNLESS(o.name != v.name, "variant " << v.name << " is listed twice");
+    for (std::uint64_t sd : v.seeds)
+      DIVCOLL_THROW_UNLESS(std::find(s.seeds.begin(), s.seeds.end(), sd) != s.seeds.end(),
+                           "variant " << v.name << ": seed " << sd << " is not one of study.seeds");
     s.variants.push_back(std::move(v));
   }
   return s;
@@ -150,6 +165,8 @@ std::vector<PlannedRun> plan(const Study& s) {
   std::vector<PlannedRun> runs;
   for (std::uint64_t seed : s.seeds)
     for (int v = 0; v < static_cast<int>(s.variants.size()); ++v) {
+      const std::vector<std::uint64_t>& only = s.variants[v].seeds;
+      if (!only.empty() && std::find(only.begin(), only.end(), seed) == only.end()) continue;
       PlannedRun r;
       r.variant = v;
       r.seed = seed;
@@ -204,7 +221,13 @@ toml::table manifest(const Study& s, const std::vector<PlannedRun>& runs, const 
   for (const Variant& v : s.variants) {
     toml::array set;
     for (const auto& o : v.set) set.push_back(o);
-    vars.push_back(toml::table{{"name", v.name}, {"doc", v.doc}, {"set", set}});
+    toml::table vt{{"name", v.name}, {"doc", v.doc}, {"set", set}};
+    if (!v.seeds.empty()) {
+      toml::array vs;
+      for (auto sd : v.seeds) vs.push_back(static_cast<int64_t>(sd));
+      vt.insert("seeds", vs);
+    }
+    vars.push_back(std::move(vt));
   }
   for (size_t i = 0; i < runs.size(); ++i) {
     const PlannedRun& r = runs[i];

@@ -14,6 +14,7 @@
 //   name = "baseline"              [A-Za-z0-9_-]+, unique; its runs are DIR/<name>/seed<k>.h5
 //   set  = []                      section.key=value overrides of this variant
 //   doc  = "..."                   optional: the reading of the paper it stands for
+//   seeds = [1, 2]                 optional: run this variant at these study seeds only (default: every one)
 // Every variant's config is built and validated (unknown keys, bad values, impossible combinations) before
 // any work. Runs go seed by seed, each seed's variants in file order; the base of a run is the earlier
 // variant of the same seed that shares the most leading stages (the earliest on a tie).
