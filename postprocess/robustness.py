@@ -344,6 +344,8 @@ def load_run(folder, rel):
     there, else the one kept; None if neither. The page reads every run the same way, from what is on disk."""
     path = os.path.join(folder, rel)
     if os.path.exists(path):
+        from divcoll_post import verdicts as V
+        V.write_arrays(path)  # the protocol's per-connector arrays (verdicts.py), kept beside the summary
         return SummaryRun(write_summary(C.Run(path)), from_file=True)
     if os.path.exists(summary_path(path)):
         return SummaryRun(summary_path(path))
@@ -692,6 +694,9 @@ def keep(folder, dest):
         if r["status"] == "complete" and os.path.exists(src):
             os.makedirs(os.path.dirname(os.path.join(dest, r["path"])), exist_ok=True)
             shutil.copy2(src, summary_path(os.path.join(dest, r["path"])))
+            arrays = os.path.splitext(os.path.join(folder, r["path"]))[0] + ".arrays.json"
+            if os.path.exists(arrays):
+                shutil.copy2(arrays, os.path.splitext(os.path.join(dest, r["path"]))[0] + ".arrays.json")
             n += 1
     return n
 

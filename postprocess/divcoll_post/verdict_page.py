@@ -1,0 +1,365 @@
+"""The verdict page of a study judged by the protocol (configs/studies/verdicts_protocol.md): per claim the paper's
+number, the effect over populations with its hierarchical-bootstrap interval, the verdict after Holm, the power
+when inconclusive; a forest plot; Fig. 2A under both comparison protocols and Figs 3A, 4, S2, S3 with intervals
+over populations. Every number comes from the `*.arrays.json` kept beside the study's run summaries."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import tomllib
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+from . import verdicts as V
+
+MIN_POPULATIONS = 3
+MAIN_VARIANTS = ["baseline"]
+SUPPLEMENT_VARIANTS = ["baseline", "supplement"]
+READINGS = [("training_length", "agents alone at 1000 steps (travel at deploy.early_step)"),
+            ("training_rate", "agents alone's 3000-step travel × 1000/3000 (a second estimator of the 1000-step "
+                              "reading, not independent evidence)")]
+COLORS = {"supported": "#1a9641", "equivalent": "#1a9641", "contradicted": "#d7191c",
+          "contradicted (negligible)": "#f4a582", "inconclusive": "#777777", "too few populations": "#bbbbbb",
+          "not measured": "#bbbbbb"}
+
+
+def num(x, d=3):
+    return "—" if x is None or not np.isfinite(x) else f"{x:+.{d}g}" if abs(x) < 1e-2 and x != 0 else f"{x:+.{d}f}"
+
+
+def judge_family(pops, family, protocol="same_length", claims=None, B=V.B_DEFAULT):
+    cl = [c for c in (claims or V.CLAIMS) if c.family == family]
+    res = V.judge(pops, cl, protocol, B=B)
+    for r in res:
+        if np.isfinite(r.estimate) and r.n < MIN_POPULATIONS:
+            r.verdict, r.reason = "too few populations", f"{r.n} population(s); a verdict needs {MIN_POPULATIONS}"
+    return res
+
+
+def margin_text(c):
+    if c.form == "band":
+        return f"[{c.band[0]:g}, {c.band[1]:g}] {c.unit}".strip()
+    m = f"{c.margin:.3g}" if c.margin != 1 / 12 else "1/12"
+    return f"{'±' if c.form == 'equivalent' else ''}{m} {c.unit}".strip()
+
+
+def cell(r):
+    if not np.isfinite(r.estimate):
+        return r.verdict + (f" ({r.reason})" if r.reason else "")
+    v = f"**{r.verdict}**"
+    if r.verdict == "inconclusive" and np.isfinite(r.power):
+        v += f" (power {r.power:.2f}; 80% at n ≈ {int(r.n80)})"
+    return f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {r.claim.unit} · {v}"
+
+
+def forest(results: Sequence[V.Result], path, title):
+    """every claim's estimate and interval in units of its margin: 0 and the margin(s) drawn"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rs = [r for r in results if np.isfinite(r.estimate)]
+    if not rs:
+        return False
+    fig, ax = plt.subplots(figsize=(8, 0.32 * len(rs) + 1.2))
+    for i, r in enumerate(rs):
+        c = r.claim
+        if c.form == "band":
+            mid, half = (c.band[0] + c.band[1]) / 2, (c.band[1] - c.band[0]) / 2
+            f = lambda x: (x - mid) / half  # noqa: E731
+        else:
+            f = lambda x: x / c.margin  # noqa: E731
+        y = len(rs) - i
+        col = COLORS.get(r.verdict, "#777777")
+        ax.plot([f(r.lo), f(r.hi)], [y, y], color=col, lw=2)
+        ax.plot([f(r.estimate)], [y], "o", color=col, ms=4)
+    ax.set_yticks([len(rs) - i for i in range(len(rs))])
+    ax.set_yticklabels([f"{r.claim.id} {r.claim.text[:60]}" for r in rs], fontsize=6)
+    for x, ls in [(0, "-"), (1, "--"), (-1, ":")]:
+        ax.axvline(x, color="k", lw=0.6, ls=ls)
+    ax.set_xscale("symlog", linthresh=2)
+    ax.set_xlabel("effect / margin (band claims: (θ − centre) / half-width); 0 solid, +margin dashed, −margin dotted")
+    ax.set_title(title, fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
+
+
+def _mean_ci(pops, fn, protocol="same_length", B=4000):
+    point, th = V.bootstrap(pops, fn, protocol, B=B)
+    lo, hi = np.quantile(th, [0.025, 0.975])
+    return float(np.mean(point)), float(lo), float(hi), point
+
+
+def fig2a(pops, path):
+    """flat and novel travel of agents alone (two protocols) and the 8 collective types: mean over populations,
+    hierarchical bootstrap 95% interval, each population a dot"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    p0 = pops[0]
+    rows = []
+    for label, proto in [("alone, 3000 steps", "same_length"), ("alone, 1000 steps", "training_length")]:
+        for where in ("flat", "novel"):
+            def fn(p, d, pr, where=where, proto=proto):
+                a = p.alone(proto)
+                return np.array([a[p.flat] if where == "flat" else a[p.novel].mean()])
+            try:
+                rows.append((label, where, *_mean_ci(pops, fn)))
+            except KeyError:
+                pass
+    for t in p0.types:
+        for where in ("flat", "novel"):
+            def fn(p, d, pr, t=t, where=where):
+                T = p.T(d)[:, :, p.types.index(t)]
+                return T[:, p.flat] if where == "flat" else T[:, p.novel].mean(axis=1)
+            rows.append((t, where, *_mean_ci(pops, fn)))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=False)
+    for ax, where in zip(axes, ("flat", "novel")):
+        rr = [r for r in rows if r[1] == where]
+        for i, (lab, _, m, lo, hi, pts) in enumerate(rr):
+            col = "#2c7bb6" if "diverse@" in lab else "#fdae61" if "@" in lab else "#999999"
+            ax.bar(i, m, color=col, alpha=0.6 if "strong" in lab else 1.0)
+            ax.errorbar(i, m, yerr=[[m - lo], [hi - m]], color="k", capsize=2, lw=1)
+            ax.plot(np.full(len(pts), i), pts, "k.", ms=2)
+        ax.set_xticks(range(len(rr)))
+        ax.set_xticklabels([r[0] for r in rr], rotation=60, ha="right", fontsize=7)
+        ax.set_title(f"{where} ({'mean of the 12 novel environments' if where == 'novel' else 'training'})", fontsize=8)
+        ax.set_ylabel("travel, BL")
+    fig.suptitle(f"Fig. 2A over {len(pops)} populations: mean, hierarchical bootstrap 95% interval, dots = populations",
+                 fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return rows
+
+
+def fig3a(pops, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = []
+    for t in (V.WU, V.WD):
+        for which in ("all", "worse", "better"):
+            fn = lambda p, d, pr, t=t, which=which: p.dtw(t, which, d)  # noqa: E731
+            rows.append((t, which, *_mean_ci(pops, fn)))
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for i, (t, which, m, lo, hi, pts) in enumerate(rows):
+        ax.bar(i, m, color="#2c7bb6" if t == V.WD else "#fdae61", hatch="" if which == "all" else "//" if which ==
+               "worse" else "..")
+        ax.errorbar(i, m, yerr=[[m - lo], [hi - m]], color="k", capsize=2, lw=1)
+        ax.plot(np.full(len(pts), i), pts, "k.", ms=2)
+    ax.set_xticks(range(len(rows)))
+    ax.set_xticklabels([f"{t.split('@')[0]}\n{w}" for t, w, *_ in rows], fontsize=7)
+    ax.set_ylabel("mean DTW per step, u")
+    ax.set_title(f"Fig. 3A over {len(pops)} populations (hierarchical bootstrap 95% interval)", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return rows
+
+
+def supplement_figs(pops, out_dir):
+    """Figs 4, S2, S3 over the populations with those stages; returns [(name, png, rows)]"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    made = []
+    sp = [p for p in pops if p.has("scaling")]
+    if len(sp) >= 2:
+        sizes = sp[0].a["scaling"]["sizes"]
+        rows = []
+        fig, ax = plt.subplots(figsize=(5, 3.5))
+        for v, (lab, col) in enumerate([("uniform", "#fdae61"), ("diverse", "#2c7bb6")]):
+            ms, los, his = [], [], []
+            for si, n in enumerate(sizes):
+                fn = lambda p, d, pr, si=si, v=v: p.scaling(d)[:, si, v]  # noqa: E731
+                m, lo, hi, _ = _mean_ci(sp, fn)
+                ms.append(m), los.append(lo), his.append(hi)
+                rows.append((f"{lab} chains, N={n}", m, lo, hi))
+            ax.errorbar(sizes, ms, yerr=[np.subtract(ms, los), np.subtract(his, ms)], color=col, capsize=3,
+                        ls="--" if lab == "uniform" else "-", label=lab)
+        ax.set_xlabel("agents in the chain")
+        ax.set_ylabel("travel, BL (mean of the 12 novel environments)")
+        ax.legend(fontsize=7)
+        ax.set_title(f"Fig. 4 over {len(sp)} populations", fontsize=8)
+        fig.tight_layout()
+        png = os.path.join(out_dir, "fig4.png")
+        fig.savefig(png, dpi=120)
+        plt.close(fig)
+        made.append(("Fig. 4", png, rows))
+    sp = [p for p in pops if p.has("specialists")]
+    if len(sp) >= 2:
+        envs = sp[0].a["specialists"]["environments"]
+        rows = []
+        for i, e in enumerate(envs):
+            fs = lambda p, d, pr, i=i: p.specialists_best(d)[:, i]  # noqa: E731
+            fg = lambda p, d, pr, e=e: p.T(d)[:, p.envs.index(e), p.types.index(V.WD)]  # noqa: E731
+            rows.append((e, *_mean_ci(sp, fg)[:3], *_mean_ci(sp, fs)[:3]))
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        x = np.arange(len(envs))
+        g = np.array([r[1:4] for r in rows])
+        s = np.array([r[4:7] for r in rows])
+        ax.bar(x, g[:, 0], color="#2c7bb6", label="generalist (weak diverse@diverse)")
+        ax.errorbar(x, g[:, 0], yerr=[g[:, 0] - g[:, 1], g[:, 2] - g[:, 0]], fmt="none", color="k", capsize=2)
+        ax.errorbar(x, s[:, 0], yerr=[s[:, 0] - s[:, 1], s[:, 2] - s[:, 0]], fmt="_", color="navy", ms=14,
+                    label="best specialist")
+        ax.set_xticks(x)
+        ax.set_xticklabels(envs, rotation=45, ha="right", fontsize=7)
+        ax.set_ylabel("travel, BL")
+        ax.legend(fontsize=7)
+        ax.set_title(f"Fig. S2 over {len(sp)} populations", fontsize=8)
+        fig.tight_layout()
+        png = os.path.join(out_dir, "fig_s2.png")
+        fig.savefig(png, dpi=120)
+        plt.close(fig)
+        made.append(("Fig. S2", png, [(f"{e}: generalist", *r[1:4]) for e, *r in [(r[0], *r[1:]) for r in rows]]
+                     + [(f"{r[0]}: best specialist", *r[4:7]) for r in rows]))
+    sp = [p for p in pops if p.has("graded")]
+    if len(sp) >= 2:
+        rows = []
+
+        def main_gain(p, d, pr):
+            return p.T(d)[:, p.novel, p.types.index(V.WD)].mean(axis=1) - p.alone(pr)[p.novel].mean()
+        rows.append(("all sources (main)", *_mean_ci(sp, main_gain)[:3]))
+        for pop in ("same_shape", "same_shape_springs"):
+            fn = lambda p, d, pr, pop=pop: p.graded_gain(pop, d)  # noqa: E731
+            rows.append((pop, *_mean_ci(sp, fn)[:3]))
+        fig, ax = plt.subplots(figsize=(5, 3.5))
+        for i, (lab, m, lo, hi) in enumerate(rows):
+            ax.bar(i, m, color="#2c7bb6")
+            ax.errorbar(i, m, yerr=[[m - lo], [hi - m]], color="k", capsize=3)
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xticks(range(len(rows)))
+        ax.set_xticklabels([r[0] for r in rows], fontsize=7)
+        ax.set_ylabel("pairs − agents alone, BL (novel mean)")
+        ax.set_title(f"Fig. S3 over {len(sp)} populations", fontsize=8)
+        fig.tight_layout()
+        png = os.path.join(out_dir, "fig_s3.png")
+        fig.savefig(png, dpi=120)
+        plt.close(fig)
+        made.append(("Fig. S3", png, rows))
+    return made
+
+
+def variance_components(pops):
+    """per type on flat: (between-population variance of the connector means, mean within-population variance of
+    one connector, R) in BL²"""
+    out = []
+    for t in pops[0].types:
+        ti = pops[0].types.index(t)
+        means = [np.nanmean(p.coll[p.flat, ti, :]) for p in pops]
+        within = [np.nanvar(p.coll[p.flat, ti, :], ddof=1) for p in pops if p.coll.shape[2] > 1]
+        R = pops[0].coll.shape[2]
+        w = float(np.mean(within)) if within else float("nan")
+        b = float(np.var(means, ddof=1) - w / R) if len(means) > 1 else float("nan")
+        out.append((t, max(b, 0.0) if np.isfinite(b) else b, w, R))
+    return out
+
+
+def provenance(folder, pops):
+    commits = sorted({p.a.get("git_commit", "") for p in pops} - {""})
+    try:
+        here = subprocess.run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "describe", "--always",
+                               "--dirty", "--abbrev=12"], capture_output=True, text=True, timeout=30).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        here = ""
+    return commits, here or "unknown"
+
+
+def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(folder, "study.toml"), "rb") as fh:
+        man = tomllib.load(fh)
+    main = V.load_study(folder, MAIN_VARIANTS)
+    supp = [p for p in V.load_study(folder, SUPPLEMENT_VARIANTS) if any(p.has(s) for s in ("specialists", "scaling",
+                                                                                         "graded"))]
+    if not main:
+        raise ValueError(f"{folder}: no run with kept arrays (`*.arrays.json`; `divcoll report {folder}` writes them)")
+    res = judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
+    alone_claims = [c for c in V.CLAIMS if c.reads_alone]
+    readings = {}
+    for proto, _ in READINGS:
+        readings[proto] = {r.claim.id: r for fam, pops in (("M", main), ("S", supp))
+                           for r in judge_family(pops, fam, proto, alone_claims, B=B)}
+    commits, here = provenance(folder, main + supp)
+    seeds_m = ", ".join(str(p.seed) for p in main)
+    seeds_s = ", ".join(str(p.seed) for p in supp) or "none yet"
+    planned = sorted({r["seed"] for r in man["run"]})
+    lines = ["# The paper's claims, judged", "",
+             f"Study `{man['name']}` ([configs/studies/verdicts.toml](../../../configs/studies/verdicts.toml)), judged by "
+             "the pre-registered protocol [configs/studies/verdicts_protocol.md]"
+             "(../../../configs/studies/verdicts_protocol.md): unit of replication the agent population, hierarchical "
+             "bootstrap (population → connector) 95% intervals, Holm over each family's hypotheses at familywise "
+             f"α = {V.ALPHA} (one-sided), margins fixed in advance. Populations: main text {len(main)} of "
+             f"{len(planned)} planned (seeds {seeds_m}); supplement and Fig. 4 {len(supp)} of 5 planned (seeds "
+             f"{seeds_s}). Run files made by divcoll {', '.join(commits) or '—'}; page by postprocess/ at {here}; "
+             f"{B} bootstrap resamples (seed {V.BOOT_SEED}).", ""]
+    if len(main) < len(planned):
+        lines += [f"**Interim**: {len(main)} of the {len(planned)} planned populations are in; verdicts can still move "
+                  "as the rest arrive (the protocol's verdicts are those at the planned count).", ""]
+    counts: Dict[str, int] = {}
+    for r in res:
+        counts[r.verdict] = counts.get(r.verdict, 0) + 1
+    lines += ["Verdicts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + ".", ""]
+    if forest(res, os.path.join(out, "forest.png"), f"every claim: estimate and 95% interval over populations, in "
+              f"units of its margin (main text n = {len(main)}, supplement n = {len(supp)})"):
+        lines += ["![forest plot](forest.png)", ""]
+    lines += ["| id | claim | paper | effect [95% interval] · verdict (same episode length) | training length | "
+              "training rate | Holm p: supports / contradicts | t interval | per population |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in res:
+        c = r.claim
+        extra = []
+        for proto, _ in READINGS:
+            rr = readings[proto].get(c.id)
+            extra.append(cell(rr) if rr is not None else "as same length")
+        pp = ", ".join(f"{s}: {v:.3g}" for s, v in r.per_population.items())
+        tci = f"[{num(r.t_lo)}, {num(r.t_hi)}]" if np.isfinite(r.t_lo) else "—"
+        hp = f"{r.p_support_holm:.3g} / {r.p_contra_holm:.3g}" if np.isfinite(r.p_support_holm) else "—"
+        lines.append(f"| {c.id} | {c.text} ({c.where}) | {c.paper} | {cell(r)} | {extra[0]} | {extra[1]} | {hp} | "
+                     f"{tci} | {pp or '—'} |")
+    lines += ["", "## Effects and margins", "", "| id | family | effect θ (positive = the paper's direction) | form | "
+              "margin |", "|---|---|---|---|---|"]
+    for c in V.CLAIMS:
+        lines.append(f"| {c.id} | {c.family} | {c.effect_text} | {c.form} | {margin_text(c)} |")
+    fig_dir = os.path.join(out, "figures")
+    os.makedirs(fig_dir, exist_ok=True)
+    rows = fig2a(main, os.path.join(fig_dir, "fig2a.png"))
+    lines += ["", "## Fig. 2A under both comparison protocols", "", "![Fig. 2A](figures/fig2a.png)", "",
+              "| | flat: mean [95% interval] | ratio to agents alone (3000 / 1000 steps) | novel: mean [95% interval] "
+              "| ratio to agents alone (3000 / 1000 steps) |", "|---|---|---|---|---|"]
+    get = {(r[0], r[1]): r for r in rows}
+    for lab in [r[0] for r in rows if r[1] == "flat"]:
+        cells = []
+        for where in ("flat", "novel"):
+            _, _, m, lo, hi, _ = get[(lab, where)]
+            a3 = get.get(("alone, 3000 steps", where))
+            a1 = get.get(("alone, 1000 steps", where))
+            ratio = "—" if "alone" in lab else f"{m / a3[2]:.2f} / " + (f"{m / a1[2]:.2f}" if a1 else "—")
+            cells += [f"{m:.2f} [{lo:.2f}, {hi:.2f}]", ratio]
+        lines.append(f"| {lab} | " + " | ".join(cells) + " |")
+    rows3 = fig3a(main, os.path.join(fig_dir, "fig3a.png"))
+    lines += ["", "## Fig. 3A", "", "![Fig. 3A](figures/fig3a.png)", "",
+              "| type | agents | mean DTW per step, u [95% interval] |", "|---|---|---|"]
+    for t, which, m, lo, hi, _ in rows3:
+        lines.append(f"| {t} | {which} | {m:.4f} [{lo:.4f}, {hi:.4f}] |")
+    for name, png, frows in supplement_figs(supp, fig_dir):
+        rel = os.path.relpath(png, out)
+        lines += ["", f"## {name}", "", f"![{name}]({rel})", "", "| | mean [95% interval], BL |", "|---|---|"]
+        for lab, m, lo, hi in frows:
+            lines.append(f"| {lab} | {m:.2f} [{lo:.2f}, {hi:.2f}] |")
+    if not supp:
+        lines += ["", "## Figs 4, S2, S3", "", "No population with the supplement stages yet."]
+    lines += ["", "## Variance components (flat travel, BL²)", "",
+              "Between populations (of a population's connector mean, less its connector part) and within a population "
+              "(one connector), the inputs of the protocol's choice of connectors per kind.", "",
+              "| type | between populations | within (one connector) | connectors per kind |", "|---|---|---|---|"]
+    for t, b, w, R in variance_components(main):
+        lines.append(f"| {t} | {b:.3f} | {w:.3f} | {R} |")
+    path = os.path.join(out, "verdicts.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,696 @@
+"""The pre-registered protocol (configs/studies/verdicts_protocol.md) as code: the arrays each run keeps, every
+claim's effect, the hierarchical bootstrap, Holm's procedure and the four verdicts.
+
+A run's arrays (`extract(run.h5)`, kept as `<run>.arrays.json` beside its summary) hold per connector and
+environment what the claims read, so a study folder kept without its run files still gives every number.
+`Population` turns one run's arrays (and, for the supplement stages, the arrays of the run that computed
+them for the same seed) into batched views for connector draws; `CLAIMS` is the registry, one entry a claim;
+`judge` evaluates a family of claims over populations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import tomllib
+from typing import Callable, Dict, List, Optional, Sequence
+
+import numpy as np
+
+ARRAYS_FORMAT = "divcoll-verdict-arrays"
+ARRAYS_VERSION = 1
+B_DEFAULT = 20000
+BOOT_SEED = 20261204
+ALPHA = 0.025  # familywise, one-sided hypotheses (Holm)
+WEAK_TYPES = ["weak_uniform@uniform", "weak_uniform@diverse", "weak_diverse@uniform", "weak_diverse@diverse"]
+STRONG_TYPES = ["strong_uniform@uniform", "strong_uniform@diverse", "strong_diverse@uniform", "strong_diverse@diverse"]
+MATCHED = ["weak_uniform@uniform", "weak_diverse@diverse", "strong_uniform@uniform", "strong_diverse@diverse"]
+WU, WD = "weak_uniform@uniform", "weak_diverse@diverse"
+SEVERE = 0.25  # "severe": a relative drop of more than a quarter (protocol §5)
+
+
+def _s(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def _list_attr(g, name):
+    v = g.attrs[name]
+    if isinstance(v, np.ndarray) and v.ndim == 1:
+        return [_s(x) for x in v if _s(x)]
+    return [x.strip() for x in _s(v).split(",") if x.strip()]
+
+
+def _ok_means(travel, status, axis):
+    """mean over `axis` of the ok (status 0, finite) entries; NaN where none; and the ok counts"""
+    travel = np.asarray(travel, float)
+    ok = (np.asarray(status) == 0) & np.isfinite(travel)
+    n = ok.sum(axis=axis)
+    s = np.where(ok, travel, 0.0).sum(axis=axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, s / np.maximum(n, 1), np.nan), n
+
+
+def _complete(f, stage):
+    return stage in f and _s(f[stage].attrs.get("status", "")) == "complete"
+
+
+def _lists(a):
+    return np.asarray(a, float).tolist()
+
+
+# ---- a run's arrays -----------------------------------------------------------------------------------------------
+
+def extract(path: str) -> dict:
+    """the arrays the protocol reads, from a run file (stages that are not complete are left out)"""
+    import h5py
+    out = {"format": ARRAYS_FORMAT, "version": ARRAYS_VERSION, "run_file": os.path.basename(path)}
+    with h5py.File(path, "r") as f:
+        cfg = tomllib.loads(_s(f.attrs["config"])) if "config" in f.attrs else {}
+        out["seed"] = cfg.get("run", {}).get("seed")
+        out["git_commit"] = _s(f.attrs.get("git_commit", ""))
+        out["episode_steps"] = {"connectors": cfg.get("connectors", {}).get("episode_steps"),
+                                "deploy": cfg.get("deploy", {}).get("episode_steps")}
+        if _complete(f, "agents"):
+            out["agents"] = {"fitness_mean": float(np.mean(f["agents/final/fitness"][()]))}
+            if "agents/gen_000/curve_u" in f:
+                c = f["agents/gen_000/curve_u"][()][:, 0]
+                fit, tu = f["agents/gen_000/fitness"][()], f["agents/gen_000/travel_u"][()]
+                bl = np.where(fit != 0, tu / np.where(fit == 0, 1, fit), np.nan)
+                out["agents"]["gen0_mean"] = float(np.nanmean(c / bl))
+        if _complete(f, "connectors"):
+            kinds = _list_attr(f["connectors"], "kinds")
+            out["connectors"] = {"untrained_bl": {k: _lists(f[f"connectors/{k}/curve_bl"][()][0]) for k in kinds
+                                                  if f"connectors/{k}/curve_bl" in f}}
+        if _complete(f, "deploy"):
+            d = f["deploy"]
+            envs, types = _list_attr(d, "environments"), _list_attr(d, "types")
+            alone, _ = _ok_means(d["agents/travel_bl"][()], d["agents/status"][()], 1)
+            coll, nok = _ok_means(d["collectives/travel_bl"][()], d["collectives/status"][()], 3)  # (E, T, R)
+            dep = {"environments": envs, "types": types, "alone_bl": _lists(alone), "collectives_bl": _lists(coll),
+                   "collectives_ok": np.asarray(nok).tolist()}
+            if "agents/travel_bl_early" in d and cfg.get("deploy", {}).get("early_step", 0) > 0:
+                dep["alone_bl_early"] = _lists(_ok_means(d["agents/travel_bl_early"][()], d["agents/status"][()], 1)[0])
+                dep["early_step"] = cfg["deploy"]["early_step"]
+            out["deploy"] = dep
+        if _complete(f, "analysis"):
+            a = f["analysis"]
+            adv, fam = {}, {}
+            for t in _list_attr(a, "types"):
+                g = a[f"adversity/{t}"]
+                dtw, ws = g["dtw"][()], g["worse_slot"][()]  # (E, R, P, 2), (E, R, P)
+                worse = np.take_along_axis(dtw, ws[..., None].astype(int), axis=3)[..., 0]
+                better = np.take_along_axis(dtw, 1 - ws[..., None].astype(int), axis=3)[..., 0]
+                with np.errstate(invalid="ignore"):
+                    adv[t] = {"all": _lists(np.nanmean(dtw, axis=(0, 2, 3))),
+                              "worse": _lists(np.nanmean(worse, axis=(0, 2))),
+                              "better": _lists(np.nanmean(better, axis=(0, 2)))}
+                c = a[f"familiarity/{t}/counts"][()]  # (E_novel, R, 6)
+                fam[t] = _lists(c[..., :3])
+            out["analysis"] = {"novel_environments": _list_attr(a, "novel_environments"), "dtw": adv,
+                               "familiarity": fam}
+        if _complete(f, "specialists"):
+            s = f["specialists"]
+            m, _ = _ok_means(s["travel_bl"][()], s["status"][()], 2)  # (E_s, R_s)
+            out["specialists"] = {"environments": _list_attr(s, "environments"), "travel_bl": _lists(m)}
+        if _complete(f, "scaling"):
+            sc = f["scaling"]
+            m, _ = _ok_means(sc["travel_bl"][()], sc["status"][()], 4)  # (E, S, 2, R)
+            out["scaling"] = {"environments": _list_attr(sc, "environments"), "sizes": [int(x) for x in sc["sizes"][()]],
+                              "travel_bl": _lists(m)}
+        if _complete(f, "graded"):
+            g = f["graded"]
+            pops = {}
+            for pop in _list_attr(g, "populations") if "populations" in g.attrs else ["same_shape", "same_shape_springs"]:
+                gp = g[pop]
+                al, _ = _ok_means(gp["deploy/agents/travel_bl"][()], gp["deploy/agents/status"][()], 1)
+                pa, _ = _ok_means(gp["deploy/pairs/travel_bl"][()], gp["deploy/pairs/status"][()], 2)  # (E, R)
+                pops[pop] = {"alone_bl": _lists(al), "pairs_bl": _lists(pa)}
+            out["graded"] = {"environments": _list_attr(g, "environments"), "populations": pops}
+    return out
+
+
+def arrays_path(run_path: str) -> str:
+    return os.path.splitext(run_path)[0] + ".arrays.json"
+
+
+def write_arrays(run_path: str) -> str:
+    path = arrays_path(run_path)
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        json.dump(extract(run_path), fh, sort_keys=True)
+        fh.write("\n")
+    os.replace(tmp, path)
+    return path
+
+
+def read_arrays(path: str) -> dict:
+    with open(path) as fh:
+        a = json.load(fh)
+    if a.get("format") != ARRAYS_FORMAT or a.get("version") != ARRAYS_VERSION:
+        raise ValueError(f"{path} is not a divcoll verdict-arrays file of version {ARRAYS_VERSION}")
+    return a
+
+
+# ---- a population, batched over connector draws -----------------------------------------------------------------
+
+def _arr(x):
+    return np.asarray(x, dtype=float)
+
+
+class Population:
+    """one agent population's arrays (merged from the runs of one seed). `view(draws)` gives the claims' inputs
+    with a leading batch axis: draws[unit] is an (b, R_unit) index array of connectors (None: all, b = 1)."""
+
+    def __init__(self, seed, parts: Sequence[dict]):
+        self.seed = seed
+        self.a = {}
+        for p in parts:  # later parts (supplement runs) add their stages; shared stages are the same numbers
+            for k, v in p.items():
+                self.a.setdefault(k, v)
+        dep = self.a.get("deploy")
+        self.units = {}  # unit name -> number of connectors
+        if dep:
+            self.envs, self.types = dep["environments"], dep["types"]
+            self.flat = self.envs.index("flat")
+            self.novel = [i for i, e in enumerate(self.envs) if e != "flat"]
+            self.coll = _arr(dep["collectives_bl"])  # (E, T, R)
+            for t in self.types:
+                self.units[t.split("@")[0]] = self.coll.shape[2]
+        sp = self.a.get("specialists")
+        if sp:
+            self.spec = _arr(sp["travel_bl"])  # (E_s, R_s)
+            for i in range(self.spec.shape[0]):
+                self.units[f"specialist:{i}"] = self.spec.shape[1]
+        gr = self.a.get("graded")
+        if gr:
+            for pop, v in gr["populations"].items():
+                self.units[f"graded:{pop}"] = _arr(v["pairs_bl"]).shape[1]
+
+    def has(self, stage):
+        return stage in self.a
+
+    def draws(self, rng, b):
+        return {u: rng.integers(0, r, size=(b, r)) for u, r in self.units.items()}
+
+    @staticmethod
+    def _pick(x, idx, axis):
+        """mean over connector axis `axis` of x after picking idx (b, R): result has a leading b axis"""
+        x = np.moveaxis(np.asarray(x, float), axis, -1)  # (..., R)
+        if idx is None:
+            return np.nanmean(x, axis=-1)[None]
+        picked = x[..., idx]  # (..., b, R)
+        m = np.nanmean(picked, axis=-1)  # (..., b)
+        return np.moveaxis(m, -1, 0)
+
+    def T(self, draws=None):
+        """(b, E, T): every type's travel per environment, mean over (drawn) connectors"""
+        out = []
+        for ti, t in enumerate(self.types):
+            idx = None if draws is None else draws[t.split("@")[0]]
+            out.append(self._pick(self.coll[:, ti, :], idx, 1))  # (b, E)
+        return np.stack(out, axis=2)
+
+    def alone(self, protocol="same_length"):
+        dep = self.a["deploy"]
+        if protocol == "training_length":
+            if "alone_bl_early" not in dep:
+                raise KeyError("deploy.early_step")
+            return _arr(dep["alone_bl_early"])
+        x = _arr(dep["alone_bl"])
+        if protocol == "training_rate":
+            st = self.a["episode_steps"]
+            return x * st["connectors"] / st["deploy"]
+        return x
+
+    def untrained(self, draws=None):
+        """(b, kinds): each kind's batch travel before the first step, mean over (drawn) connectors"""
+        u = self.a["connectors"]["untrained_bl"]
+        return np.stack([self._pick(_arr(v), None if draws is None else draws.get(k), 0) for k, v in u.items()],
+                        axis=1)
+
+    def dtw(self, t, which, draws=None):
+        v = _arr(self.a["analysis"]["dtw"][t][which])
+        return self._pick(v, None if draws is None else draws[t.split("@")[0]], 0)  # (b,)
+
+    def familiarity(self, t, draws=None):
+        """(b, E_novel, 3): states in both / training-only / novel-only cells, mean over (drawn) connectors"""
+        v = _arr(self.a["analysis"]["familiarity"][t])  # (E, R, 3)
+        return self._pick(v, None if draws is None else draws[t.split("@")[0]], 1)
+
+    def specialists_best(self, draws=None):
+        """(b, E_s): the best specialist's travel per environment (over drawn specialists)"""
+        out = []
+        for i in range(self.spec.shape[0]):
+            row = self.spec[i]
+            if draws is None:
+                out.append(np.array([np.nanmax(row)]))
+            else:
+                out.append(np.nanmax(row[draws[f"specialist:{i}"]], axis=1))
+        return np.stack(out, axis=1)
+
+    def scaling(self, draws=None):
+        """(b, S, 2): novel mean travel of the uniform (0) and diverse (1) chains per size"""
+        sc = self.a["scaling"]
+        x = _arr(sc["travel_bl"])  # (E, S, 2, R)
+        nov = [i for i, e in enumerate(sc["environments"]) if e != "flat"]
+        out = []
+        for v, unit in enumerate(["weak_uniform", "weak_diverse"]):
+            m = self._pick(x[:, :, v, :], None if draws is None else draws[unit], 2)  # (b, E, S)
+            out.append(np.mean(m[:, nov, :], axis=1))
+        return np.stack(out, axis=2)
+
+    def graded_gain(self, pop, draws=None):
+        """(b,): novel mean of graded population `pop`'s pairs − its agents alone"""
+        g = self.a["graded"]
+        nov = [i for i, e in enumerate(g["environments"]) if e != "flat"]
+        v = g["populations"][pop]
+        pairs = self._pick(_arr(v["pairs_bl"]), None if draws is None else draws[f"graded:{pop}"], 1)  # (b, E)
+        return np.mean(pairs[:, nov], axis=1) - np.mean(_arr(v["alone_bl"])[nov])
+
+
+# ---- the claims -------------------------------------------------------------------------------------------------
+
+@dataclasses.dataclass
+class Claim:
+    id: str
+    family: str  # "M" main text, "S" supplement and Fig. 4
+    text: str
+    where: str
+    paper: str
+    effect_text: str
+    form: str  # greater, noninferior, equivalent, band
+    margin: float  # δ (greater, noninferior, equivalent)
+    unit: str
+    needs: tuple  # stages
+    effect: Callable  # (Population, draws or None, protocol) -> (b,) array
+    band: Optional[tuple] = None
+    reads_alone: bool = False
+
+
+def _drop(x, flat, novel):
+    """relative drop flat -> novel along the last axis (environments)"""
+    return 1 - np.mean(x[..., novel], axis=-1) / x[..., flat]
+
+
+def _ti(p, t):
+    return p.types.index(t)
+
+
+def e_fitness(p, d, pr):
+    return np.array([p.a["agents"]["fitness_mean"]])
+
+
+def e_random(p, d, pr):
+    return np.array([p.a["agents"]["gen0_mean"]])
+
+
+def e_alone_severe(p, d, pr):
+    a = p.alone(pr)
+    return np.array([_drop(a, p.flat, p.novel) - SEVERE])
+
+
+def e_alone_greatest_drop(p, d, pr):
+    T = p.T(d)  # (b, E, T)
+    dr = _drop(np.moveaxis(T, 1, 2), p.flat, p.novel)  # (b, T)
+    return _drop(p.alone(pr), p.flat, p.novel) - dr.max(axis=1)
+
+
+def e_wdd_least_drop(p, d, pr):
+    T = p.T(d)
+    dr = _drop(np.moveaxis(T, 1, 2), p.flat, p.novel)
+    i = _ti(p, WD)
+    others = np.delete(dr, i, axis=1)
+    return others.min(axis=1) - dr[:, i]
+
+
+def e_untrained_severe(p, d, pr):
+    u = p.untrained(d)  # (b, kinds)
+    return 1 - u.max(axis=1) / p.a["agents"]["fitness_mean"] - SEVERE
+
+
+def _beat_alone(p, d, alone):
+    T = p.T(d)
+    m = np.stack([T[:, p.flat, _ti(p, t)] for t in MATCHED], axis=1)
+    return m.min(axis=1) - alone[p.flat]
+
+
+def e_beat_alone(p, d, pr):
+    return _beat_alone(p, d, p.alone(pr))
+
+
+def e_beat_alone_1000(p, d, pr):
+    return _beat_alone(p, d, p.alone("training_length"))
+
+
+def e_wdd_best_flat(p, d, pr):
+    T = p.T(d)
+    others = np.stack([T[:, p.flat, _ti(p, t)] for t in MATCHED if t != WD], axis=1)
+    return T[:, p.flat, _ti(p, WD)] - others.max(axis=1)
+
+
+def e_all_drop(p, d, pr):
+    T = p.T(d)
+    return (T[:, p.flat, :] - T[:, p.novel, :].mean(axis=1)).min(axis=1)
+
+
+def e_wdd_best_novel(p, d, pr):
+    N = p.T(d)[:, p.novel, :].mean(axis=1)  # (b, T)
+    i = _ti(p, WD)
+    return N[:, i] - np.delete(N, i, axis=1).max(axis=1)
+
+
+def e_transplant_small_loss(p, d, pr):
+    T = p.T(d)
+    return T[:, p.flat, _ti(p, "weak_diverse@uniform")] - T[:, p.flat, _ti(p, WD)]
+
+
+def e_transplant_interaction(p, d, pr):
+    T = p.T(d)[:, p.flat, :]
+    g = lambda t: T[:, _ti(p, t)]  # noqa: E731
+    return (g(WD) - g("weak_diverse@uniform")) - (g("weak_uniform@diverse") - g(WU))
+
+
+def e_strong_poor(p, d, pr):
+    N = p.T(d)[:, p.novel, :].mean(axis=1)
+    w = np.stack([N[:, _ti(p, t)] for t in WEAK_TYPES], axis=1).mean(axis=1)
+    s = np.stack([N[:, _ti(p, t)] for t in STRONG_TYPES], axis=1).mean(axis=1)
+    return w - s
+
+
+def e_wdd_most_envs(p, d, pr):
+    T = p.T(d)[:, p.novel, :]
+    i = _ti(p, WD)
+    others = np.stack([T[:, :, _ti(p, t)] for t in WEAK_TYPES if t != WD], axis=2).max(axis=2)
+    return (T[:, :, i] > others).sum(axis=1) / len(p.novel) - 0.5
+
+
+def e_wdd_vs_alone_novel(p, d, pr):
+    T = p.T(d)
+    return T[:, p.novel, _ti(p, WD)].mean(axis=1) - p.alone(pr)[p.novel].mean()
+
+
+def e_disrupted_more(p, d, pr):
+    return p.dtw(WD, "all", d) - p.dtw(WU, "all", d)
+
+
+def e_worse_altered_more(p, d, pr):
+    return np.minimum(p.dtw(WU, "worse", d) - p.dtw(WU, "better", d), p.dtw(WD, "worse", d) - p.dtw(WD, "better", d))
+
+
+def e_worse_changed_more(p, d, pr):
+    return p.dtw(WD, "worse", d) - p.dtw(WU, "worse", d)
+
+
+def e_better_comparable(p, d, pr):
+    return p.dtw(WD, "better", d) - p.dtw(WU, "better", d)
+
+
+def _fam_share_count(p, d, col, diverse_more):
+    fd, fu = p.familiarity(WD, d)[..., col], p.familiarity(WU, d)[..., col]  # (b, E)
+    wins = (fd > fu) if diverse_more else (fu > fd)
+    return wins.sum(axis=1) / fd.shape[1] - 0.5
+
+
+def e_more_familiar(p, d, pr):
+    return _fam_share_count(p, d, 0, True)
+
+
+def e_uniform_more_novel_only(p, d, pr):
+    return _fam_share_count(p, d, 2, False)
+
+
+def e_uniform_more_train_only(p, d, pr):
+    return _fam_share_count(p, d, 1, False)
+
+
+def e_wind_unfamiliar(p, d, pr):
+    e = p.a["analysis"]["novel_environments"].index("wind")
+    fd, fu = p.familiarity(WD, d)[:, e, :], p.familiarity(WU, d)[:, e, :]
+    return fd[:, 0] / fd.sum(axis=1) - fu[:, 0] / fu.sum(axis=1)
+
+
+def e_scaling_grows(p, d, pr):
+    s = p.scaling(d)  # (b, S, 2)
+    adv = s[:, :, 1] - s[:, :, 0]
+    return adv[:, -1] - adv[:, 0]
+
+
+def e_scaling_better(p, d, pr):
+    s = p.scaling(d)
+    return (s[:, :, 1] - s[:, :, 0]).mean(axis=1)
+
+
+def e_generalist_beats_specialist(p, d, pr):
+    T = p.T(d)
+    envs = p.a["specialists"]["environments"]
+    gen = np.stack([T[:, p.envs.index(e), _ti(p, WD)] for e in envs], axis=1)
+    return (gen - p.specialists_best(d)).max(axis=1)
+
+
+def e_graded(p, d, pr):
+    T = p.T(d)
+    main = T[:, p.novel, _ti(p, WD)].mean(axis=1) - p.alone(pr)[p.novel].mean()
+    return main - p.graded_gain("same_shape_springs", d)
+
+
+BL, DROP, U, ENV, SHARE = 0.5, 0.05, 0.005, 1 / 12, 0.02
+
+CLAIMS: List[Claim] = [
+    Claim("C01", "M", "Trained agents travel almost 4 BL on flat", "Results, Component training", "almost four",
+          "mean 1000-step travel of the final population", "band", 0.0, "BL", ("agents",), e_fitness, band=(3.0, 4.0)),
+    Claim("C02", "M", "Random agents travel about 0 BL", "Results, Component training", "averaged zero",
+          "mean 1000-step travel of generation 0 before any gradient step", "equivalent", BL, "BL", ("agents",),
+          e_random),
+    Claim("C03", "M", "Deployed alone, agents are severely compromised in the novel environments",
+          "Results, Component training", "about 4 → just over 2 BL", "drop(A) − 0.25", "greater", DROP, "",
+          ("deploy",), e_alone_severe, reads_alone=True),
+    Claim("C04", "M", "Independent agents suffer the greatest average decrease in the novel environments",
+          "Results", "Fig. 2A", "drop(A) − max over the 8 types of drop(T)", "greater", DROP, "", ("deploy",),
+          e_alone_greatest_drop, reads_alone=True),
+    Claim("C05", "M", "Weak diverse-trained connectors on diverse pairs suffer the least decrease", "Results",
+          "Fig. 2A", "min over the other 7 types of drop(T) − drop(T wd@d)", "greater", DROP, "", ("deploy",),
+          e_wdd_least_drop),
+    Claim("C06", "M", "Untrained connectors cause a severe drop in behaviour", "Results, Connector training",
+          "severe (not shown)", "1 − max over kinds of untrained batch travel / agents' 1000-step travel − 0.25",
+          "greater", DROP, "", ("agents", "connectors"), e_untrained_severe),
+    Claim("C07", "M", "Trained collectives of all four kinds travel further than independent agents (flat, same "
+          "episode length)", "Results, Connector training", "Fig. 2A", "min over matched types of T(flat) − A(flat)",
+          "greater", BL, "BL", ("deploy",), e_beat_alone, reads_alone=True),
+    Claim("C08", "M", "The same, with agents alone at their training length (1000 steps)",
+          "Results, Connector training", "Fig. 2A", "min over matched types of T(flat) − A1000(flat)", "greater", BL,
+          "BL", ("deploy",), e_beat_alone_1000),
+    Claim("C09", "M", "Weak diverse collectives achieve the best performance on flat", "Results, Connector training",
+          "Fig. 2A", "T wd@d(flat) − max over the other matched types", "greater", BL, "BL", ("deploy",),
+          e_wdd_best_flat),
+    Claim("C10", "M", "Every collective type travels less in the novel environments", "Results, Collective deployment",
+          "Fig. 2A", "min over the 8 types of T(flat) − N(T)", "greater", BL, "BL", ("deploy",), e_all_drop),
+    Claim("C11", "M", "Weak diverse collectives fare best across the novel environments",
+          "Results, Collective deployment", "Fig. 2A", "N(T wd@d) − max over the other 7 types", "greater", BL, "BL",
+          ("deploy",), e_wdd_best_novel),
+    Claim("C12", "M", "Transplanted onto clones, diverse-trained weak connectors lose only a little", "Fig. 2B",
+          "Fig. 2B", "T wd@u(flat) − T wd@d(flat)", "noninferior", BL, "BL", ("deploy",), e_transplant_small_loss),
+    Claim("C13", "M", "Diverse-trained connectors exploit diversity, uniform-trained ones cannot (kind × deployment)",
+          "Fig. 2B", "Fig. 2B", "[T wd@d − T wd@u] − [T wu@d − T wu@u] (flat)", "greater", BL, "BL", ("deploy",),
+          e_transplant_interaction),
+    Claim("C14", "M", "Strong connectors deploy poorly (why Figs 2C-N drop them)", "Results, Collective deployment",
+          "Fig. 2A", "mean of N(T) over weak types − over strong types", "greater", BL, "BL", ("deploy",),
+          e_strong_poor),
+    Claim("C15", "M", "In most novel environments weak diverse collectives fare best of the weak types", "Figs 2C-N",
+          "most", "#(wd@d best of the weak types)/12 − 1/2", "greater", ENV, "", ("deploy",), e_wdd_most_envs),
+    Claim("C16", "M", "They fare much better than independent agents in those environments", "Figs 2C-N",
+          "Figs 2C-N", "N(T wd@d − A)", "greater", BL, "BL", ("deploy",), e_wdd_vs_alone_novel, reads_alone=True),
+    Claim("C17", "M", "Tethered agents in diverse collectives are disrupted more than clones in uniform ones",
+          "Fig. 3A", "Fig. 3A", "D wd@d(all) − D wu@u(all)", "greater", U, "u", ("analysis",), e_disrupted_more),
+    Claim("C18", "M", "Worse agents are altered more than better ones, for both connector types", "Fig. 3A", "Fig. 3A",
+          "min over wu@u, wd@d of D(worse) − D(better)", "greater", U, "u", ("analysis",), e_worse_altered_more),
+    Claim("C19", "M", "Diverse-trained connectors change the worse agent more than uniform-trained ones", "Fig. 3A",
+          "p < 0.001", "D wd@d(worse) − D wu@u(worse)", "greater", U, "u", ("analysis",), e_worse_changed_more),
+    Claim("C20", "M", "Their effect on the better agents is comparable", "Fig. 3A", "same mild impact",
+          "D wd@d(better) − D wu@u(better)", "equivalent", U, "u", ("analysis",), e_better_comparable),
+    Claim("C21", "M", "Novel environments feel more familiar to diverse-trained connectors (more states in shared "
+          "cells)", "Table S1", "9 of 12", "#(F wd@d(both) > F wu@u(both))/12 − 1/2", "greater", ENV, "",
+          ("analysis",), e_more_familiar),
+    Claim("C22", "M", "Uniform-trained connectors meet more states exclusive to the novel environment", "Table S1",
+          "9 of 12", "#(F wu@u(novel-only) > F wd@d(novel-only))/12 − 1/2", "greater", ENV, "", ("analysis",),
+          e_uniform_more_novel_only),
+    Claim("C23", "M", "Uniform-trained connectors meet more states exclusive to training", "Table S1", "7 of 12",
+          "#(F wu@u(train-only) > F wd@d(train-only))/12 − 1/2", "greater", ENV, "", ("analysis",),
+          e_uniform_more_train_only),
+    Claim("C24", "M", "Wind feels more unfamiliar to the uniform-trained connector", "Fig. 3B-C",
+          "158,118 vs 131,303 in both", "share of wind's fit in shared cells, wd@d − wu@u", "greater", SHARE, "",
+          ("analysis",), e_wind_unfamiliar),
+    Claim("C25", "S", "The advantage of diversity grows with collective size", "Fig. 4", "Fig. 4",
+          "adv(20) − adv(5), adv = N(diverse chains) − N(uniform chains)", "greater", BL, "BL", ("scaling",),
+          e_scaling_grows),
+    Claim("C26", "S", "Diverse-trained connectors adapt better than uniform-trained ones in larger collectives",
+          "Fig. 4", "Fig. 4", "mean over sizes of adv", "greater", BL, "BL", ("scaling",), e_scaling_better),
+    Claim("C27", "S", "Generalists sometimes beat specialists trained in the environment", "Results; Fig. S2",
+          "in some cases", "max over novel e of T wd@d(e) − best specialist(e)", "greater", BL, "BL",
+          ("deploy", "specialists"), e_generalist_beats_specialist),
+    Claim("C28", "S", "More sources of diversity give more resilience", "Fig. S3", "Fig. S3",
+          "g(all sources) − g(same shape and springs), g = N(pairs) − N(alone)", "greater", BL, "BL",
+          ("deploy", "graded"), e_graded, reads_alone=True),
+]
+BY_ID = {c.id: c for c in CLAIMS}
+
+
+# ---- the estimator ------------------------------------------------------------------------------------------------
+
+@dataclasses.dataclass
+class Result:
+    claim: Claim
+    n: int
+    estimate: float = float("nan")
+    lo: float = float("nan")
+    hi: float = float("nan")
+    t_lo: float = float("nan")
+    t_hi: float = float("nan")
+    se: float = float("nan")
+    per_population: Dict = dataclasses.field(default_factory=dict)
+    p_support: float = float("nan")
+    p_contra: float = float("nan")
+    p_support_holm: float = float("nan")
+    p_contra_holm: float = float("nan")
+    verdict: str = "not measured"
+    power: float = float("nan")
+    n80: float = float("nan")
+    reason: str = ""
+
+
+def _p_above(th, c):
+    """one-sided bootstrap p of 'θ > c is shown' (small when the resamples lie above c)"""
+    return (1 + np.sum(th <= c)) / (th.size + 1)
+
+
+def _p_below(th, c):
+    return (1 + np.sum(th >= c)) / (th.size + 1)
+
+
+def hypotheses(form, margin, band, th):
+    """(p of the supporting hypothesis, p of the contradicting one) from the bootstrap resamples th"""
+    if form == "greater":
+        return _p_above(th, 0.0), _p_below(th, margin)
+    if form == "noninferior":
+        return _p_above(th, -margin), _p_below(th, -margin)
+    a, b = band if form == "band" else (-margin, margin)
+    sup = max(_p_above(th, a), _p_below(th, b))
+    con = min(1.0, 2 * min(_p_above(th, b), _p_below(th, a)))
+    return sup, con
+
+
+def holm(ps: Sequence[float]) -> np.ndarray:
+    """Holm-adjusted p-values (NaN stay NaN and do not count)"""
+    ps = np.asarray(ps, float)
+    out = np.full(ps.shape, np.nan)
+    idx = [i for i in np.argsort(ps, kind="stable") if np.isfinite(ps[i])]
+    m, run = len(idx), 0.0
+    for k, i in enumerate(idx):
+        run = max(run, min(1.0, (m - k) * ps[i]))
+        out[i] = run
+    return out
+
+
+def _phi(x):
+    return 0.5 * (1 + math.erf(x / math.sqrt(2)))
+
+
+def _z(p):
+    from scipy.stats import norm
+    return float(norm.ppf(p))
+
+
+def power_at_edge(form, margin, band, se, n, level):
+    """(power of the supporting hypothesis at the claim's edge, populations for 80%) under a normal approximation"""
+    if not (np.isfinite(se) and se > 0):
+        return float("nan"), float("nan")
+    z = _z(1 - level)
+    if form in ("greater", "noninferior"):
+        pw = _phi(margin / se - z)
+        n80 = n * (se * (z + _z(0.8)) / margin) ** 2
+    else:
+        h = (band[1] - band[0]) / 2 if form == "band" else margin
+        pw = max(0.0, 2 * _phi(h / se - z) - 1)
+        n80 = n * (se * (z + _z(0.9)) / h) ** 2
+    return pw, float(math.ceil(n80))
+
+
+def bootstrap(pops: Sequence[Population], fn, protocol="same_length", B=B_DEFAULT, seed=BOOT_SEED):
+    """(per-population effects at all connectors, B resampled means): populations with replacement, inside each
+    its connectors (per unit) with replacement"""
+    n = len(pops)
+    point = np.array([float(fn(p, None, protocol)[0]) for p in pops])
+    rng = np.random.Generator(np.random.PCG64(seed))
+    pick = rng.integers(0, n, size=(B, n))
+    theta = np.zeros((B, n))
+    for j in range(n):
+        for i, p in enumerate(pops):
+            rows = np.nonzero(pick[:, j] == i)[0]
+            if rows.size == 0:
+                continue
+            vals = np.asarray(fn(p, p.draws(rng, rows.size), protocol), float)
+            theta[rows, j] = np.broadcast_to(vals, (rows.size,))
+    return point, theta.mean(axis=1)
+
+
+def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_length", B=B_DEFAULT,
+          seed=BOOT_SEED, alpha=ALPHA) -> List[Result]:
+    """every claim of one family over the populations that have its stages; Holm over the family's hypotheses"""
+    results = []
+    for k, c in enumerate(claims):
+        ps = [p for p in pops if all(p.has(s) for s in c.needs)]
+        r = Result(c, len(ps))
+        if len(ps) < 2:
+            r.reason = f"{len(ps)} population(s) with {', '.join(c.needs)}"
+            results.append(r)
+            continue
+        try:
+            point, th = bootstrap(ps, c.effect, protocol, B, seed + k)
+        except (KeyError, ValueError, IndexError) as e:
+            r.reason = f"the runs lack {e}"
+            results.append(r)
+            continue
+        r.per_population = {p.seed: float(v) for p, v in zip(ps, point)}
+        r.estimate = float(np.mean(point))
+        r.lo, r.hi = (float(x) for x in np.quantile(th, [0.025, 0.975]))
+        from scipy.stats import t as tdist
+        half = tdist.ppf(0.975, len(ps) - 1) * np.std(point, ddof=1) / math.sqrt(len(ps))
+        r.t_lo, r.t_hi = r.estimate - half, r.estimate + half
+        r.se = float(np.std(th, ddof=1))
+        r.p_support, r.p_contra = hypotheses(c.form, c.margin, c.band, th)
+        results.append(r)
+    measured = [r for r in results if np.isfinite(r.p_support)]
+    H = 2 * len(measured)
+    adj = holm([x for r in measured for x in (r.p_support, r.p_contra)])
+    for i, r in enumerate(measured):
+        r.p_support_holm, r.p_contra_holm = float(adj[2 * i]), float(adj[2 * i + 1])
+        sup, con = r.p_support_holm <= alpha, r.p_contra_holm <= alpha
+        eq = r.claim.form == "equivalent"
+        if sup and con:
+            r.verdict = "contradicted (negligible)"
+        elif sup:
+            r.verdict = "equivalent" if eq else "supported"
+        elif con:
+            r.verdict = "contradicted"
+        else:
+            r.verdict = "inconclusive"
+            r.power, r.n80 = power_at_edge(r.claim.form, r.claim.margin, r.claim.band, r.se, r.n, alpha / H)
+    return results
+
+
+# ---- a study folder -----------------------------------------------------------------------------------------------
+
+def load_study(folder: str, variants: Sequence[str]) -> List[Population]:
+    """the populations of a study folder: per seed, the arrays of the runs of `variants` (in order) merged"""
+    with open(os.path.join(folder, "study.toml"), "rb") as fh:
+        man = tomllib.load(fh)
+    by_seed: Dict[int, List[dict]] = {}
+    for v in variants:
+        for r in man["run"]:
+            if r["variant"] != v:
+                continue
+            path = arrays_path(os.path.join(folder, r["path"]))
+            if os.path.exists(path):
+                by_seed.setdefault(r["seed"], []).append(read_arrays(path))
+    return [Population(seed, parts) for seed, parts in sorted(by_seed.items())]

@@ -1,0 +1,158 @@
+"""The protocol's estimator (divcoll_post/verdicts.py) on synthetic populations with known effects, and the verdict
+page recomputed from kept arrays (postprocess/gallery/studies/verdicts)."""
+import os
+import shutil
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+from divcoll_post import verdict_page, verdicts as V  # noqa: E402
+
+ENVS = ["flat", "decline", "gap", "ice", "incline", "low_gravity", "obstacle", "sand", "step_down", "step_up",
+        "sticky", "treadmill", "wind"]
+TYPES = V.WEAK_TYPES + V.STRONG_TYPES
+KEPT = os.path.join(os.path.dirname(HERE), "gallery", "studies", "verdicts")
+
+
+def synthetic(seed, rng, R=3, alone_flat=15.0, beat=-5.0, wdd_bonus=2.0, worse_diff=0.003, worse_sd=0.01,
+              better_sd=0.0003):
+    """one population's arrays: collectives `beat` BL from agents alone on flat, weak diverse@diverse `wdd_bonus`
+    above the other types, the two types' worse-agent DTW `worse_diff` apart (population sd `worse_sd`), their
+    better-agent DTW equal up to `better_sd`"""
+    E, T = len(ENVS), len(TYPES)
+    alone = np.full(E, 6.0)
+    alone[0] = alone_flat
+    pop = rng.normal(0, 0.3)
+    coll = np.empty((E, T, R))
+    for ti, t in enumerate(TYPES):
+        base = np.full(E, 3.5)
+        base[0] = alone_flat + beat
+        if t == V.WD:
+            base += wdd_bonus
+        coll[:, ti, :] = base[:, None] + pop + rng.normal(0, 0.2, size=(E, R))
+    w = rng.normal(worse_diff, worse_sd)
+    b = rng.normal(0, better_sd)
+    dtw = {V.WU: {"all": list(0.10 + rng.normal(0, 0.002, R)), "worse": list(0.11 + rng.normal(0, 0.001, R)),
+                  "better": list(0.09 + rng.normal(0, 0.0002, R))},
+           V.WD: {"all": list(0.10 + rng.normal(0, 0.002, R)), "worse": list(0.11 + w + rng.normal(0, 0.001, R)),
+                  "better": list(0.09 + b + rng.normal(0, 0.0002, R))}}
+    fam = {t: (rng.uniform(100, 200, size=(12, R, 3))).tolist() for t in (V.WU, V.WD)}
+    return {"format": V.ARRAYS_FORMAT, "version": V.ARRAYS_VERSION, "seed": seed, "git_commit": "synthetic",
+            "episode_steps": {"connectors": 1000, "deploy": 3000},
+            "agents": {"fitness_mean": 5.0 + rng.normal(0, 0.1), "gen0_mean": rng.normal(0, 0.02)},
+            "connectors": {"untrained_bl": {k: list(rng.uniform(0.5, 1.0, R)) for k in
+                                            ["weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"]}},
+            "deploy": {"environments": ENVS, "types": TYPES, "alone_bl": alone.tolist(),
+                       "alone_bl_early": (alone / 3).tolist(), "early_step": 1000, "collectives_bl": coll.tolist(),
+                       "collectives_ok": np.full((E, T, R), 100).tolist()},
+            "analysis": {"novel_environments": ENVS[1:], "dtw": dtw, "familiarity": fam}}
+
+
+def populations(n, **kw):
+    rng = np.random.Generator(np.random.PCG64(7))
+    return [V.Population(s, [synthetic(s, rng, **kw)]) for s in range(1, n + 1)]
+
+
+class KnownEffects(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.res = {r.claim.id: r for r in V.judge(populations(10), [c for c in V.CLAIMS if c.family == "M"], B=4000)}
+
+    def test_a_clear_effect_in_the_papers_direction_is_supported(self):
+        r = self.res["C09"]  # weak diverse@diverse 2 BL above every other type on flat
+        self.assertAlmostEqual(r.estimate, 2.0, delta=0.3)
+        self.assertGreater(r.lo, V.BY_ID["C09"].margin)
+        self.assertEqual(r.verdict, "supported")
+
+    def test_an_effect_against_the_paper_is_contradicted(self):
+        r = self.res["C07"]  # collectives 5 BL below agents alone on flat (3 BL for the best)
+        self.assertLess(r.hi, 0)
+        self.assertEqual(r.verdict, "contradicted")
+
+    def test_a_difference_inside_the_margin_is_equivalent(self):
+        r = self.res["C20"]  # better agents' DTW equal up to 0.0003 u, margin 0.005 u
+        self.assertGreater(r.lo, -V.BY_ID["C20"].margin)
+        self.assertLess(r.hi, V.BY_ID["C20"].margin)
+        self.assertEqual(r.verdict, "equivalent")
+
+    def test_a_small_noisy_effect_is_inconclusive_with_its_power(self):
+        pops = populations(4, worse_diff=0.004, worse_sd=0.012)
+        r = {x.claim.id: x for x in V.judge(pops, [V.BY_ID["C19"]], B=4000)}["C19"]
+        self.assertLess(r.lo, 0)
+        self.assertGreater(r.hi, V.BY_ID["C19"].margin)
+        self.assertEqual(r.verdict, "inconclusive")
+        self.assertTrue(0 <= r.power < 0.8)
+        self.assertGreater(r.n80, 4)
+
+    def test_a_positive_but_negligible_effect_is_contradicted_as_negligible(self):
+        pops = populations(10, worse_diff=0.001, worse_sd=0.0002)
+        r = V.judge(pops, [V.BY_ID["C19"]], B=4000)[0]
+        self.assertGreater(r.lo, 0)
+        self.assertLess(r.hi, V.BY_ID["C19"].margin)
+        self.assertEqual(r.verdict, "contradicted (negligible)")
+
+    def test_holm_adjusts_in_order_and_is_monotone(self):
+        adj = V.holm([0.01, 0.04, 0.03, float("nan"), 0.005])
+        np.testing.assert_allclose(adj[[4, 0, 2, 1]], [0.02, 0.03, 0.06, 0.06])
+        self.assertTrue(np.isnan(adj[3]))
+
+    def test_the_interval_covers_the_population_mean_not_the_connector_noise(self):
+        # between-population sd 0.3 BL over 10 populations: the interval's half-width is near 1.96 * 0.3 / sqrt(10)
+        r = self.res["C09"]
+        self.assertLess(r.hi - r.lo, 0.6)
+        self.assertGreater(r.hi - r.lo, 0.02)
+
+    def test_connector_draws_change_the_effect_inside_a_population(self):
+        p = populations(1)[0]
+        rng = np.random.Generator(np.random.PCG64(1))
+        vals = V.e_wdd_best_flat(p, p.draws(rng, 200), "same_length")
+        self.assertEqual(vals.shape, (200,))
+        self.assertGreater(np.std(vals), 0)
+
+
+class Page(unittest.TestCase):
+    def test_the_page_is_made_from_kept_arrays_alone(self):
+        d = tempfile.mkdtemp()
+        try:
+            rng = np.random.Generator(np.random.PCG64(3))
+            import json
+            runs = []
+            for s in (1, 2, 3, 4):
+                os.makedirs(os.path.join(d, "baseline"), exist_ok=True)
+                with open(os.path.join(d, "baseline", f"seed{s}.arrays.json"), "w") as fh:
+                    json.dump(synthetic(s, rng), fh)
+                runs.append(f'[[run]]\nvariant = "baseline"\nseed = {s}\npath = "baseline/seed{s}.h5"\n'
+                            'status = "complete"\n')
+            with open(os.path.join(d, "study.toml"), "w") as fh:
+                fh.write('format = "divcoll-study"\nname = "synthetic"\n' + "\n".join(runs))
+            path = verdict_page.write(d, os.path.join(d, "verdicts"), B=2000)
+            with open(path) as fh:
+                text = fh.read()
+            for c in V.CLAIMS:
+                self.assertIn(f"| {c.id} |", text)
+            res = {r.claim.id: r for r in V.judge(V.load_study(d, ["baseline"]),
+                                                   [c for c in V.CLAIMS if c.family == "M"], B=2000)}
+            self.assertIn(verdict_page.cell(res["C09"]), text)
+            self.assertTrue(os.path.exists(os.path.join(d, "verdicts", "forest.png")))
+        finally:
+            shutil.rmtree(d)
+
+    @unittest.skipUnless(os.path.exists(os.path.join(KEPT, "study.toml")), "no kept verdicts study")
+    def test_the_committed_page_is_recomputed_from_the_kept_arrays(self):
+        committed = os.path.join(os.path.dirname(HERE), "gallery", "verdicts", "verdicts.md")
+        d = tempfile.mkdtemp()
+        try:
+            path = verdict_page.write(KEPT, d)
+            table = lambda t: [ln for ln in t.splitlines() if ln.startswith("|")]  # noqa: E731
+            with open(path) as a, open(committed) as b:
+                self.assertEqual(table(a.read()), table(b.read()))
+        finally:
+            shutil.rmtree(d)
+
+
+if __name__ == "__main__":
+    unittest.main()
