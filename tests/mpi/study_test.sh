@@ -185,4 +185,15 @@ grep -q "weak_agents/seed2.h5: computes agents,connectors,deploy,analysis$" "$W/
   || { cat "$W/plan_p.log"; fail "claims_reduced_precision.toml is refused"; }
 grep -q "float_networks/seed3.h5: computes agents,connectors,deploy,analysis$" "$W/plan_p.log" \
   || { cat "$W/plan_p.log"; fail "a run.precision variant reuses a stage computed in double"; }
+# a variant that names its seeds runs only at those, after its seed's baseline, and reuses it
+"$D" study "$SRC/configs/studies/verdicts.toml" --out "$W/verdicts" --plan > "$W/plan_v.log" \
+  || { cat "$W/plan_v.log"; fail "verdicts.toml is refused"; }
+grep -q "= 15 runs" "$W/plan_v.log" || { cat "$W/plan_v.log"; fail "verdicts.toml: not 10 baseline + 5 supplement runs"; }
+grep -q "supplement/seed6.h5: computes specialists,scaling,graded, reuses baseline/seed6.h5" "$W/plan_v.log" \
+  || { cat "$W/plan_v.log"; fail "the supplement variant does not reuse its seed's baseline"; }
+! grep -q "supplement/seed1.h5" "$W/plan_v.log" || fail "the supplement variant runs at a seed it does not name"
+sed 's/^seeds = \[6, 7, 8, 9, 10\]/seeds = [6, 11]/' "$SRC/configs/studies/verdicts.toml" > "$W/bad4.toml"
+sed -i "s|base = \"../paper.toml\"|base = \"$SRC/configs/paper.toml\"|" "$W/bad4.toml"
+set +e; "$D" study "$W/bad4.toml" --out "$W/bad4" --plan > "$W/bad4.log" 2>&1; rc=$?; set -e
+[ "$rc" = 2 ] && grep -q "seed 11 is not one of study.seeds" "$W/bad4.log" || { cat "$W/bad4.log"; fail "a variant seed outside study.seeds: exit $rc"; }
 echo "study: passed"
