@@ -559,25 +559,28 @@ class Result:
     reason: str = ""
 
 
-def _p_above(th, c):
-    """one-sided bootstrap p of 'θ > c is shown' (small when the resamples lie above c)"""
-    return (1 + np.sum(th <= c)) / (th.size + 1)
+def _p_above(est, se, df, c):
+    """one-sided p of 'θ > c is shown': Student t with df degrees of freedom on (est − c) / se"""
+    from scipy.stats import t as tdist
+    if not se > 0:
+        return 0.0 if est > c else 1.0
+    return float(tdist.sf((est - c) / se, df))
 
 
-def _p_below(th, c):
-    return (1 + np.sum(th >= c)) / (th.size + 1)
+def _p_below(est, se, df, c):
+    return _p_above(-est, se, df, -c)
 
 
-def hypotheses(form, margin, band, th):
-    """(p of the supporting hypothesis, p of the contradicting one) from the bootstrap resamples th"""
+def hypotheses(form, margin, band, est, se, df):
+    """(p of the supporting hypothesis, p of the contradicting one) for estimate est with standard error se"""
+    up = lambda c: _p_above(est, se, df, c)  # noqa: E731
+    down = lambda c: _p_below(est, se, df, c)  # noqa: E731
     if form == "greater":
-        return _p_above(th, 0.0), _p_below(th, margin)
+        return up(0.0), down(margin)
     if form == "noninferior":
-        return _p_above(th, -margin), _p_below(th, -margin)
+        return up(-margin), down(-margin)
     a, b = band if form == "band" else (-margin, margin)
-    sup = max(_p_above(th, a), _p_below(th, b))
-    con = min(1.0, 2 * min(_p_above(th, b), _p_below(th, a)))
-    return sup, con
+    return max(up(a), down(b)), min(1.0, 2 * min(up(b), down(a)))
 
 
 def holm(ps: Sequence[float]) -> np.ndarray:
@@ -602,7 +605,8 @@ def _z(p):
 
 
 def power_at_edge(form, margin, band, se, n, level):
-    """(power of the supporting hypothesis at the claim's edge, populations for 80%) under a normal approximation"""
+    """(power of the supporting hypothesis at the claim's edge, populations for 80%) under a normal approximation
+    with the bootstrap's standard error (a slight overstatement at small n, where t quantiles are wider)"""
     if not (np.isfinite(se) and se > 0):
         return float("nan"), float("nan")
     z = _z(1 - level)
@@ -651,14 +655,18 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
             r.reason = f"the runs lack {e}"
             results.append(r)
             continue
+        from scipy.stats import t as tdist
+        n = len(ps)
         r.per_population = {p.seed: float(v) for p, v in zip(ps, point)}
         r.estimate = float(np.mean(point))
-        r.lo, r.hi = (float(x) for x in np.quantile(th, [0.025, 0.975]))
-        from scipy.stats import t as tdist
-        half = tdist.ppf(0.975, len(ps) - 1) * np.std(point, ddof=1) / math.sqrt(len(ps))
+        # the hierarchical bootstrap's standard error, corrected for the bootstrap's (n − 1)/n shrinkage of a mean's
+        # variance, with Student t quantiles on n − 1 degrees of freedom (protocol §3, amendment A2)
+        r.se = float(np.std(th, ddof=1) * math.sqrt(n / (n - 1)))
+        q = tdist.ppf(0.975, n - 1)
+        r.lo, r.hi = r.estimate - q * r.se, r.estimate + q * r.se
+        half = q * np.std(point, ddof=1) / math.sqrt(n)
         r.t_lo, r.t_hi = r.estimate - half, r.estimate + half
-        r.se = float(np.std(th, ddof=1))
-        r.p_support, r.p_contra = hypotheses(c.form, c.margin, c.band, th)
+        r.p_support, r.p_contra = hypotheses(c.form, c.margin, c.band, r.estimate, r.se, n - 1)
         results.append(r)
     measured = [r for r in results if np.isfinite(r.p_support)]
     H = 2 * len(measured)
@@ -677,6 +685,25 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
             r.verdict = "inconclusive"
             r.power, r.n80 = power_at_edge(r.claim.form, r.claim.margin, r.claim.band, r.se, r.n, alpha / H)
     return results
+
+
+def population_from_summary(path: str) -> Population:
+    """a population read from a run summary (`*.summary.json`, robustness.py) alone: its Fig. 2A means per
+    environment, every connector of a type pooled into one mean. Only the claims that read deploy's travel can be
+    computed, and without the connector level (each population's connector mean is fixed in the bootstrap)."""
+    with open(path) as fh:
+        s = json.load(fh)
+    fig = s["fig2a"]
+    cfg = s.get("config", {})
+    coll = np.array([[fig["collectives"][t] for t in fig["types"]]]).transpose(2, 1, 0)  # (E, T, 1)
+    dep = {"environments": fig["environments"], "types": fig["types"], "alone_bl": fig["alone"]["as_run"],
+           "collectives_bl": coll.tolist()}
+    if "training_length" in fig["alone"]:
+        dep["alone_bl_early"] = fig["alone"]["training_length"]
+    a = {"seed": cfg.get("run", {}).get("seed"), "git_commit": s.get("git_commit", ""), "deploy": dep,
+         "episode_steps": {"connectors": cfg.get("connectors", {}).get("episode_steps"),
+                           "deploy": cfg.get("deploy", {}).get("episode_steps")}}
+    return Population(a["seed"], [a])
 
 
 # ---- a study folder -----------------------------------------------------------------------------------------------

@@ -89,7 +89,7 @@ class KnownEffects(unittest.TestCase):
         self.assertGreater(r.n80, 4)
 
     def test_a_positive_but_negligible_effect_is_contradicted_as_negligible(self):
-        pops = populations(10, worse_diff=0.001, worse_sd=0.0002)
+        pops = populations(10, worse_diff=0.002, worse_sd=0.0002)
         r = V.judge(pops, [V.BY_ID["C19"]], B=4000)[0]
         self.assertGreater(r.lo, 0)
         self.assertLess(r.hi, V.BY_ID["C19"].margin)
