@@ -15,6 +15,9 @@ import numpy as np
 from . import verdicts as V
 
 MIN_POPULATIONS = 3
+# the earlier paper-scale seeds (10 connectors per kind, central stages), kept as run summaries only: shown as a check
+PAPER_SEEDS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "gallery", "studies",
+                           "paper_seeds", "baseline")
 MAIN_VARIANTS = ["baseline"]
 SUPPLEMENT_VARIANTS = ["baseline", "supplement"]
 READINGS = [("training_length", "agents alone at 1000 steps (travel at deploy.early_step)"),
@@ -269,6 +272,28 @@ def provenance(folder, pops):
     return commits, here or "unknown"
 
 
+def check_paper_seeds(B):
+    """markdown: the deploy claims on the earlier paper-scale seeds' summaries (10 connectors per kind)"""
+    import glob
+    files = sorted(glob.glob(os.path.join(PAPER_SEEDS, "seed*.summary.json")))
+    if len(files) < 2:
+        return []
+    pops = [V.population_from_summary(f) for f in files]
+    claims = [c for c in V.CLAIMS if c.needs == ("deploy",)]
+    res = judge_family(pops, "M", claims=claims, B=B)
+    lines = ["", "## Check: the earlier paper-scale seeds", "",
+             f"Seeds {', '.join(str(p.seed) for p in pops)} of `configs/studies/paper_seeds.toml` (10 connectors per "
+             "kind, the central stages, kept as run summaries in `postprocess/gallery/studies/paper_seeds/`): the "
+             "claims that read deploy's travel, judged by the same rules as their own family. Their summaries keep "
+             "each type's mean over its 10 connectors, so the interval has no connector level; these populations "
+             "are not pooled with the study's (same seeds, other connector draws).", "",
+             "| id | claim | effect [95% interval] · verdict | per population |", "|---|---|---|---|"]
+    for r in res:
+        pp = ", ".join(f"{s}: {v:.3g}" for s, v in r.per_population.items())
+        lines.append(f"| {r.claim.id} | {r.claim.text} | {cell(r)} | {pp} |")
+    return lines
+
+
 def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(folder, "study.toml"), "rb") as fh:
@@ -359,6 +384,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
               "| type | between populations | within (one connector) | connectors per kind |", "|---|---|---|---|"]
     for t, b, w, R in variance_components(main):
         lines.append(f"| {t} | {b:.3f} | {w:.3f} | {R} |")
+    lines += check_paper_seeds(B)
     path = os.path.join(out, "verdicts.md")
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
