@@ -85,6 +85,8 @@ int main(int argc, char** argv) {
   auto* b = app.add_subcommand("bench", "steps per CPU-second of one core, and speed against error");
   b->add_option("--seconds", bench.seconds, "minimum CPU seconds timed per row")->check(CLI::Range(0.01, 600.0));
   b->add_flag("--quick", bench.quick, "fewer rows");
+  b->add_option("--pacmap", bench.pacmap, "only the CPU cost of one PaCMAP fit of each of these numbers of states")
+      ->delimiter(',')->check(CLI::Range(4, 1000000));
   b->add_option("--config", bench.config, "run config whose weak connector stiffness to use (default: the paper's)")
       ->check(CLI::ExistingFile);
 

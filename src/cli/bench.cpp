@@ -10,6 +10,8 @@
 #include <ctime>
 #include <vector>
 
+#include "analysis/pacmap.hpp"
+#include "common/rng.hpp"
 #include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
@@ -136,7 +138,27 @@ struct PairNets {
 
 }  // namespace
 
+// the CPU cost of one PaCMAP fit (the analysis stage's familiarity, ANALYSIS.md §1) by its number of states: 32-D
+// states (a connector's hidden layer) uniform in [-1, 1], the analysis stage's options
+int bench_pacmap(const std::vector<int>& sizes) {
+  std::printf("# divcoll bench --pacmap (one core, version %s %s)\n\n", DIVCOLL_VERSION, divcoll::git_commit());
+  std::printf("| states in the fit | CPU seconds | µs per state | CPU s / n² × 1e9 |\n|---|---|---|---|\n");
+  for (int n : sizes) {
+    Rng rng(static_cast<uint64_t>(n));
+    std::vector<double> X(static_cast<size_t>(n) * 32);
+    for (double& x : X) x = 2.0 * uniform01(rng) - 1.0;
+    const double t0 = thread_cpu_seconds();
+    const std::vector<double> Y = analysis::pacmap_fit(X.data(), n, 32);
+    const double s = thread_cpu_seconds() - t0;
+    std::printf("| %d | %.2f | %.1f | %.2f |\n", n, s, 1e6 * s / n, 1e9 * s / (static_cast<double>(n) * n));
+    std::fflush(stdout);
+    if (Y.empty()) return 1;
+  }
+  return 0;
+}
+
 int bench(const BenchArgs& a) {
+  if (!a.pacmap.empty()) return bench_pacmap(a.pacmap);
   std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
               divcoll::git_commit());
   Fixture f = make_fixture(24, 7);

@@ -83,6 +83,7 @@ struct BenchArgs {
   double seconds = 0.5;  // minimum timed wall time per row
   bool quick = false;    // fewer rows
   std::string config;    // the connector stiffness comes from this config's [connectors] (default: the paper's)
+  std::vector<int> pacmap;  // when given: only the cost of one PaCMAP fit of each of these numbers of states
 };
 int bench(const BenchArgs& a);
 
