@@ -25,7 +25,6 @@ inline std::string shared_dir() {
 inline std::string parity_dir() { return shared_dir() + "/testdata/parity"; }
 inline std::string source_dir() { return DIVCOLL_SOURCE_DIR; }
 inline std::string divcoll_binary() { return DIVCOLL_BINARY; }
-// the text of README.md ("" if it cannot be read)
 // runs the divcoll binary with args (a shell word list); its exit code and its stdout and stderr together
 struct Exec {
   int code;
@@ -41,10 +40,12 @@ inline Exec run_divcoll(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
-inline std::string readme() {
-  std::ifstream in(source_dir() + "/README.md");
+// the text of a document of the checkout, path relative to its root ("" if it cannot be read); readme(): README.md
+inline std::string doc(const std::string& path) {
+  std::ifstream in(source_dir() + "/" + path);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
+inline std::string readme() { return doc("README.md"); }
 // a random agent from stream (seed, `stream`) with anchors from a short (300-step) run on flat
 inline collective::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
   Rng rng = make_rng(seed, stream, 0);

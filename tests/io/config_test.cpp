@@ -217,12 +217,12 @@ TEST(ConfigSchema, MarkdownListsEveryKey) {
   EXPECT_THAT(md, HasSubstr("[2, 100000]"));  // agents.population's range
 }
 
-// the README's key table is the schema's (regenerate it with `divcoll keys`)
+// the configuration manual's key table is the schema's (regenerate it with `divcoll keys`)
 TEST(ConfigSchema, ReadmeTableIsTheSchema) {
-  const std::string readme = testing::readme();
-  ASSERT_FALSE(readme.empty()) << "README.md not found";
-  EXPECT_NE(readme.find(schema_markdown()), std::string::npos)
-      << "README.md's config table differs from the schema: replace it with the output of `divcoll keys`";
+  const std::string manual = testing::doc("configs/README.md");
+  ASSERT_FALSE(manual.empty()) << "configs/README.md not found";
+  EXPECT_NE(manual.find(schema_markdown()), std::string::npos)
+      << "configs/README.md's key table differs from the schema: replace it with the output of `divcoll keys`";
 }
 
 TEST(ConfigSchema, DefaultsAreValidAndAnEmptyFileGivesThem) {

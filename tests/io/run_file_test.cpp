@@ -1,7 +1,7 @@
 // the run-file schema: lookup by path (the most literal row wins), shapes from axis lengths, the
 // attributes a new dataset of a run file gets (and the refusals of a dataset the table does not have),
-// check() of a whole file, and the README's tables. The whole tiny pipeline's file against the table is
-// checked in tests/cli/cli_test.cpp (Cli.RunWritesEveryPromisedDatasetOfEachImplementedStage).
+// check() of a whole file, and the run-file manual's tables (mpi/README.md). The whole tiny pipeline's file against
+// the table is checked in tests/cli/cli_test.cpp (Cli.RunWritesEveryPromisedDatasetOfEachImplementedStage).
 #include "io/run_file.hpp"
 
 #include <gmock/gmock.h>
@@ -219,12 +219,12 @@ TEST_F(RunFileWrite, CheckNamesWhatTheSchemaLacks) {
   EXPECT_GT(all.size(), problems.size());
 }
 
-// the README's run-file tables are the schema's (regenerate them with `divcoll schema`)
+// the run-file manual's tables are the schema's (regenerate them with `divcoll schema`)
 TEST(RunFileSchema, ReadmeTablesAreTheSchema) {
-  const std::string readme = testing::readme();
-  ASSERT_FALSE(readme.empty()) << "README.md not found";
-  EXPECT_NE(readme.find(markdown()), std::string::npos)
-      << "README.md's run-file tables differ from the schema: replace them with the output of `divcoll schema`";
+  const std::string manual = testing::doc("mpi/README.md");
+  ASSERT_FALSE(manual.empty()) << "mpi/README.md not found";
+  EXPECT_NE(manual.find(markdown()), std::string::npos)
+      << "mpi/README.md's run-file tables differ from the schema: replace them with the output of `divcoll schema`";
   // and the tables name every row and axis
   const std::string md = markdown();
   for (const Axis& a : axes()) EXPECT_THAT(md, HasSubstr("| `" + a.name + "` |"));
