@@ -21,7 +21,7 @@ run file at its rank count. Exit status 2 on bad input (one line on stderr).
 Work units ("pair-step equivalents"): one forward control step of a pair of agents joined by a connector; an
 agent alone counts 1/2, a chain of N agents N/2, a step with gradient (taped forward + reverse pass) counts
 g times a forward step, g measured as the connectors stage's cost per pair-step over the deploy stage's (both
-in the quick runs; the README benchmark's 2.6 without them). PaCMAP fits are their own unit: n log2 n for a
+in the quick runs; jobs/BENCHMARKS.md's 2.6 without them). PaCMAP fits are their own unit: n log2 n for a
 fit of n states, costed with what the analysis stage's busy time leaves after its re-simulated episodes at
 the deploy stage's cost per unit.
 """
@@ -39,7 +39,7 @@ import h5py
 STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULTS = os.path.join(os.path.dirname(HERE), "configs", "paper.toml")  # every key's built-in default
-DEFAULT_GRAD_FACTOR = 2.6  # README benchmark: a pair's forward steps/s over its forward+backward steps/s
+DEFAULT_GRAD_FACTOR = 2.6  # jobs/BENCHMARKS.md: a pair's forward steps/s over its forward+backward steps/s
 UNIT = "pair-step eq."
 
 
@@ -299,12 +299,12 @@ def grad_factor(runs):
     """g = cost per pair-step with gradient (connectors) / cost per forward pair-step (deploy); (g, source)."""
     rc, rd = reference(runs, "connectors"), reference(runs, "deploy")
     if rc is None or rd is None:
-        return DEFAULT_GRAD_FACTOR, "README benchmark (no connectors or deploy timing in the quick runs)"
+        return DEFAULT_GRAD_FACTOR, "jobs/BENCHMARKS.md (no connectors or deploy timing in the quick runs)"
     wc = sum(ph.work for ph in stage_phases(rc.cfg, "connectors", 1.0, rc.path))
     wd = sum(ph.work for ph in stage_phases(rd.cfg, "deploy", 1.0, rd.path))
     bc, bd = sum(rc.timings["connectors"].busy), sum(rd.timings["deploy"].busy)
     if wc <= 0 or wd <= 0 or bc <= 0 or bd <= 0:
-        return DEFAULT_GRAD_FACTOR, "README benchmark (no connectors or deploy work measured)"
+        return DEFAULT_GRAD_FACTOR, "jobs/BENCHMARKS.md (no connectors or deploy work measured)"
     return (bc / wc) / (bd / wd), "measured: connectors' cost per pair-step / deploy's"
 
 

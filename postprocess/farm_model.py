@@ -23,7 +23,7 @@ waits a share a of a round serves n items in n b / (1 - a), the c_serve the mode
 round and the result size are the paper config's connectors and specialists training rounds (one pair
 episode with gradient per item; its result is the connector's gradient, 1473 doubles). Assumes a network
 whose per-message CPU cost at the master is no higher than this machine's shared memory, and leaves out
-what a round does besides the farm (broadcasting weights, HDF5 writes, checkpoints: see the README).
+what a round does besides the farm (broadcasting weights, HDF5 writes, checkpoints: see mpi/README.md).
 --pairs-per-item b models items of b pair episodes whose gradients the worker sums (n / b items of b t,
 each still one gradient to serve and fold): a granularity the stages do not use today (it would change
 the order of the gradient sums, so run files would change once).

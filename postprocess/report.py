@@ -161,7 +161,7 @@ def scale_section(run):
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
                    "the count that is short. The paper-scale report, from one run file of `configs/paper.toml` with "
                    "every stage (seed 1, 1 h 59 min on 2 cores), is in the repository at "
-                   "`postprocess/gallery/paper_seed1/report.md`; the README's \"Results at paper scale\" "
+                   "`postprocess/gallery/paper_seed1/report.md`; postprocess/RESULTS.md "
                    "summarises it.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
@@ -175,7 +175,7 @@ def precision_line(run):
     prec = claims.key(claims.config(run), "run.precision") or "double"
     if prec == "float_networks":
         return ("Arithmetic: `run.precision = float_networks`: the controllers' networks in float, the physics and every "
-                "optimizer in double (README, \"A float path\"); its numbers are not bit-comparable with a double run's.")
+                "optimizer in double (jobs/BENCHMARKS.md, \"The float path\"); its numbers are not bit-comparable with a double run's.")
     return f"Arithmetic: `run.precision = {prec}` (the spec's)."
 
 

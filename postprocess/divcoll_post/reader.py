@@ -9,7 +9,7 @@
         print(run.deploy)                               # what the group holds, with each dataset's doc
 
 Every dataset of a run file carries the attributes the run-file schema gives it (src/io/run_file.cpp,
-README "Run-file layout"): `axes` (its dimension names, comma separated), `unit`, `doc` and, for each
+mpi/README.md "Run-file layout"): `axes` (its dimension names, comma separated), `unit`, `doc` and, for each
 labelled axis, `labels_<axis>` (comma separated). The reader turns those into an xarray.DataArray with
 named dimensions and label coordinates; nothing about shapes, counts or names is written here. Data is
 read when a dataset is first accessed. The file is opened read-only and stays open until close() (or the

@@ -1,6 +1,6 @@
 """Read-only access to the experiment stages of a divcoll run file, and the statistics the figures use.
 
-Used by fig2.py, fig4.py, fig_s2.py and fig_s3.py. Layout read here (README "Run-file layout"; a dataset
+Used by fig2.py, fig4.py, fig_s2.py and fig_s3.py. Layout read here (mpi/README.md "Run-file layout"; a dataset
 that names its axes, as every one the run-file schema writes does, must name the ones below, and
 environment / type lists come from the groups' attributes):
 

@@ -1,6 +1,6 @@
 """Read-only access to a divcoll run file (HDF5, root attribute format = "divcoll-run").
 
-Layout read here (agents stage; README "Run-file layout", SPEC §9):
+Layout read here (agents stage; mpi/README.md "Run-file layout", SPEC §9):
 
     /                 attributes format, version, git_commit, ranks, seed, config (resolved TOML), ...
     /agents           attributes status ("complete" | "running"), generations_done

@@ -180,7 +180,7 @@ class CostTest(Base):
         write_run(self.path("run_np1.h5"), 1, stages=("agents", "scaling"))
         costs, g, src = E.measure(E.read_runs(self.dir, E.load_defaults()))
         self.assertEqual(g, E.DEFAULT_GRAD_FACTOR)
-        self.assertIn("README", src)
+        self.assertIn("BENCHMARKS", src)
         self.assertEqual(sorted(costs), ["agents", "scaling"])
 
 

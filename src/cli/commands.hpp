@@ -127,7 +127,7 @@ std::map<std::string, std::pair<std::vector<unsigned long long>, std::string>> d
 // one 64-bit digest (FNV-1a, hex) of every dataset's path, shape and bytes, in path order
 std::string datasets_digest(const std::string& path);
 
-// divcoll schema [--check RUN.h5]: the run-file schema as markdown (the README's tables), or a run file's
+// divcoll schema [--check RUN.h5]: the run-file schema as markdown (mpi/README.md's tables), or a run file's
 // disagreements with it (0 none, 1 some)
 int schema(const std::string& check);
 

@@ -1,4 +1,4 @@
-// divcoll schema: the run-file schema as the README's markdown tables, or a run file checked against it
+// divcoll schema: the run-file schema as mpi/README.md's markdown tables, or a run file checked against it
 #include <cstdio>
 #include <string>
 

@@ -14,7 +14,7 @@ namespace divcoll::evo {
 // how the parameters step each epoch
 enum class GdRule {
   paper,      // θ ← θ + step·g/‖g‖ (ascent on travel), the last parameters are kept
-  keep_best,  // the same steps, but the best parameters seen are kept (default: see README, measured)
+  keep_best,  // the same steps, but the best parameters seen are kept (default: see configs/README.md, measured)
   adam,       // Adam on θ with learning rate adam_lr; the best parameters seen are kept
 };
 GdRule gd_rule_from(const std::string& name);  // "paper", "keep_best", "adam"; InputError otherwise

@@ -1,5 +1,5 @@
 // the run configuration: one schema table (schema() below) drives parsing, checking, the resolved TOML
-// echo, the flat key/value list and the README table
+// echo, the flat key/value list and configs/README.md's key table
 #include "io/config.hpp"
 
 #include <toml++/toml.h>
@@ -118,7 +118,7 @@ const std::vector<Key>& schema() {
         pick("run", "precision", T::Choice, "\"double\"", {"double", "float_networks"},
              "the simulator's arithmetic: double everywhere (SPEC §10, the spec's step), or float_networks: the "
              "controllers' networks (inputs, weights, activations, their gradients) in float and the physics in "
-             "double, about 1.3-1.5x faster per episode (README, engine section) but not bit-comparable with double",
+             "double, about 1.3-1.5x faster per episode (jobs/BENCHMARKS.md, the float path) but not bit-comparable with double",
              DIVCOLL_FIELD(run.precision)),
         // [agents]
         num("agents", "population", T::Int, "100", "[2, 100000]", "agents", "size of the evolved population",
@@ -978,7 +978,7 @@ std::string to_toml(const RunConfig& cfg) {
   RunConfig c = cfg;
   std::string out =
       "# divcoll run configuration, fully resolved: every key, its value and what it means\n"
-      "# (run it with `divcoll run FILE`; keys and ranges: README, or divcoll::io::schema_markdown)\n";
+      "# (run it with `divcoll run FILE`; keys and ranges: configs/README.md, or `divcoll keys`)\n";
   std::string section;
   for (const Key& k : schema()) {
     if (k.section != section) {

@@ -2,7 +2,7 @@
 // [run] [agents] [connectors] [deploy] [specialists] [scaling] [graded] [analysis] [output].
 //
 // One schema table in config.cpp lists every key (type, default, allowed range or values, unit, doc);
-// parsing, checking, the resolved TOML echo, the flat key/value list for HDF5 attributes and the README
+// parsing, checking, the resolved TOML echo, the flat key/value list for HDF5 attributes and configs/README.md's
 // table all come from it. Defaults are the paper's counts (SPEC §4.4, §6.4, §7).
 #pragma once
 

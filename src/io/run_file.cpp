@@ -1,5 +1,5 @@
 // the run-file schema table, its lookup by path, the attributes it puts on new datasets, the check of a
-// whole file against it, and the README tables made from it.
+// whole file against it, and mpi/README.md's tables made from it.
 #include "io/run_file.hpp"
 
 #include <hdf5.h>

@@ -1,4 +1,4 @@
-// the run file's layout as one table (README "Run-file layout", generated from it by `divcoll schema`).
+// the run file's layout as one table (mpi/README.md "Run-file layout", generated from it by `divcoll schema`).
 //
 // Every group and dataset of a run file has one row: its path (relative to the root; a `{name}`
 // placeholder stands for one path segment, e.g. `connectors/{kind}/params`), its element type, its named
@@ -99,7 +99,7 @@ std::vector<std::pair<std::string, std::string>> attributes(const h5::Node& root
 // (a complete run of every stage has them all)
 std::vector<std::string> check(const h5::File& f, bool every_row = false);
 
-// the README's run-file tables: the axes, then every group and dataset
+// mpi/README.md's run-file tables: the axes, then every group and dataset
 std::string markdown();
 
 }  // namespace divcoll::io::run_file

@@ -12,7 +12,7 @@
 // registers of doubles (2 or 4 of floats) and needs no horizontal sum; the old row-by-row dot products (8 partial sums reduced per
 // output) spent most of their time in the reductions. Why fused: on this machine (Intel Xeon, two 512-bit
 // FMA ports) a separate multiply and add take the same ports as one fma, so fusing halves the work of a
-// layer. See the README's engine section for the measured gain of each.
+// layer. jobs/BENCHMARKS.md gives the measured gain of each.
 //
 // Every kernel is a template on the scalar T, instantiated for double (the engine) and float (measured by
 // `divcoll bench` against double, for a float path; mlp.hpp). The double instantiation is the code it was before

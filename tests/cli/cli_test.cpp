@@ -186,7 +186,7 @@ TEST_F(Cli, ExistingRunFileIsNeitherOverwrittenNorResumedWithAnotherConfig) {
 namespace divcoll {
 namespace {
 
-// the stages write the datasets they promise, with the shapes the README gives
+// the stages write the datasets they promise, with the shapes mpi/README.md gives
 TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
   const Exec r = run("run " + cfg + " --out " + path("run.h5"));  // every stage

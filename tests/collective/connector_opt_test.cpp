@@ -41,7 +41,7 @@ std::vector<ProbeResult> evaluate(const std::vector<Probe>& probes) {
 
 // a pair whose episode ran but whose gradient overflowed is numerical trouble of that pair: it is left out of the
 // mean and counted, so it cannot turn the weights into NaN (seen in float_networks at paper scale: 3 of 20 strong
-// connectors, README "The whole paper in float")
+// connectors, postprocess/RESULTS.md "The whole paper in float")
 TEST(ConnectorOpt, APairWithANonFiniteGradientIsLeftOutAndCounted) {
   collective::ProbeSum sum;
   collective::PairOutcome good, overflowed, failed;

@@ -111,7 +111,7 @@ TEST(FloatNetworksDeterminism, TapedUntapedAndRepeatedRunsGiveTheSameBits) {
   EXPECT_FALSE(b.redone_in_double) << "an ordinary pair's float gradient is finite";
 }
 
-// float's range ends at 3.4e38. The scene: the float paper run's connectors stage rerun (README, 3b8fa66),
+// float's range ends at 3.4e38. The scene: the float paper run's connectors stage rerun (postprocess/RESULTS.md, 3b8fa66),
 // strong uniform-trained replicate 7's final connector joining agent 2 of the final population to its clone,
 // on flat: over 1000 steps (a training episode) its gradient reaches 7e43 in double, and the float pass
 // overflowed. Such an episode is redone with the networks in double: the caller gets double's finite result.
