@@ -51,6 +51,8 @@ def margin_text(c):
 def cell(r):
     if not np.isfinite(r.estimate):
         return r.verdict + (f" ({r.reason})" if r.reason else "")
+    if not np.isfinite(r.lo):
+        return f"{num(r.estimate)} {r.claim.unit} · {r.verdict} ({r.reason})"
     v = f"**{r.verdict}**"
     if r.verdict == "inconclusive" and np.isfinite(r.power):
         v += f" (power {r.power:.2f}; 80% at n ≈ {int(r.n80)})"
@@ -62,7 +64,7 @@ def forest(results: Sequence[V.Result], path, title):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    rs = [r for r in results if np.isfinite(r.estimate)]
+    rs = [r for r in results if np.isfinite(r.lo)]
     if not rs:
         return False
     fig, ax = plt.subplots(figsize=(8, 0.32 * len(rs) + 1.2))

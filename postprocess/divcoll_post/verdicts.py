@@ -640,6 +640,13 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
         r = Result(c, len(ps))
         if len(ps) < 2:
             r.reason = f"{len(ps)} population(s) with {', '.join(c.needs)}"
+            try:
+                r.per_population = {p.seed: float(c.effect(p, None, protocol)[0]) for p in ps}
+            except (KeyError, ValueError, IndexError) as e:
+                r.reason = f"the runs lack {e}"
+            if r.per_population:
+                r.estimate = float(np.mean(list(r.per_population.values())))
+                r.verdict = "too few populations"
             results.append(r)
             continue
         try:
