@@ -191,8 +191,14 @@ const std::vector<Key>& schema() {
              DIVCOLL_FIELD(connectors.optimizer)),
         num("connectors", "lr", T::Double, "0.003", "(0, 1]", "", "learning rate (adam) or step (normalized)",
             DIVCOLL_FIELD(connectors.lr)),
-        num("connectors", "clip_norm", T::Double, "1.0", "(0, 1e6]", "", "global gradient-norm clip",
+        num("connectors", "clip_norm", T::Double, "1.0", "(0, 1e6]", "", "gradient-norm clip (see clip)",
             DIVCOLL_FIELD(connectors.clip_norm)),
+        pick("connectors", "clip", T::Choice, "\"global\"", {"global", "per_pair"},
+             "what clip_norm clips: global = the batch-mean gradient before an Adam step (SPEC §6.4; normalized "
+             "steps ignore clip_norm); per_pair = each pair's gradient, scaled down to clip_norm before the batch "
+             "mean (adam and normalized), so a few pairs whose backpropagation explodes cannot set the step's "
+             "direction. Not with cmaes or es (no gradient)",
+             DIVCOLL_FIELD(connectors.clip)),
         num("connectors", "init_out_gain", T::Double, "0.1", "[0, 10]", "",
             "initial weights of the connector's output layer ~ N(0, (gain·sqrt(2/(in+out)))²); 3 as the agent's, "
             "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
@@ -705,6 +711,11 @@ void check_combinations(const RunConfig& c) {
                        "connectors.weak_stiffness = " << double_text(c.connectors.weak_stiffness)
                                                       << " must be less than connectors.strong_stiffness = "
                                                       << double_text(c.connectors.strong_stiffness));
+  DIVCOLL_THROW_UNLESS(c.connectors.clip != "per_pair" ||
+                           (c.connectors.optimizer != "cmaes" && c.connectors.optimizer != "es"),
+                       "connectors.clip = per_pair clips each pair's gradient, but connectors.optimizer = "
+                           << c.connectors.optimizer << " uses no gradient (set clip = \"global\" or a gradient "
+                           << "optimizer: adam, normalized)");
   // uniform batches and deployments pair agent i with its clone, i < count
   const auto& kinds = c.connectors.kinds;
   if (stage_enabled(c, "connectors") && (listed(kinds, "weak_uniform") || listed(kinds, "strong_uniform"))) {

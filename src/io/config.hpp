@@ -58,7 +58,8 @@ struct RunConfig {
     double amplitude{};              // actuation amplitude of connector springs (fraction of rest length)
     std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
-    double clip_norm{};              // global gradient norm clip
+    double clip_norm{};              // gradient norm clip
+    std::string clip;                // global | per_pair: what clip_norm clips (the batch mean or each pair's gradient)
     double init_out_gain{};          // init gain of the connector network's output layer
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
     std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
