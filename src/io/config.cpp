@@ -184,6 +184,12 @@ const std::vector<Key>& schema() {
             "actuation amplitude of connector springs, a fraction of their rest length (SPEC §6.2 reads the paper "
             "as 0.6; 0 = passive tethers); every stage that builds a connector uses it",
             DIVCOLL_FIELD(connectors.amplitude)),
+        num("connectors", "damping", T::Double, "0.0", "[0, 50]", "1/s",
+            "dashpot c_s of the 5 connector springs: the force −c_s·((v_i − v_j)·d̂)·d̂ per unit mass of SPEC §2.2 "
+            "(SPEC §6.2 has 0, the default), damping how fast a connector stretches; every stage that builds a "
+            "connector uses it and scene files carry it (springs/damping). At most 50: a mass in up to 3 connector "
+            "springs keeps 2·3·c_s·Δt = 1.2 below the explicit step's limit of 2",
+            DIVCOLL_FIELD(connectors.damping)),
         pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
              "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
              "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "

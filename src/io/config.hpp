@@ -56,6 +56,7 @@ struct RunConfig {
     double weak_stiffness{};         // spring stiffness of weak connectors
     double strong_stiffness{};       // spring stiffness of strong connectors
     double amplitude{};              // actuation amplitude of connector springs (fraction of rest length)
+    double damping{};                // dashpot c_s of connector springs, 1/s (SPEC §2.2; 0 = SPEC §6.2)
     std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
     double clip_norm{};              // gradient norm clip

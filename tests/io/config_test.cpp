@@ -165,6 +165,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.weak_stiffness",
                                              "connectors.strong_stiffness",
                                              "connectors.amplitude",
+                                             "connectors.damping",
                                              "connectors.optimizer",
                                              "connectors.lr",
                                              "connectors.clip_norm",
@@ -479,6 +480,8 @@ TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
   EXPECT_THAT(refusal("[deploy]\nfeature_placement = \"behind\"\n"), HasSubstr("deploy.feature_placement"));
   EXPECT_THAT(refusal("[analysis]\ncell_scale = 0.0\n"), HasSubstr("analysis.cell_scale = 0"));
   EXPECT_THAT(refusal("[connectors]\nclip = \"pair\"\n"), HasSubstr("connectors.clip"));
+  EXPECT_THAT(refusal("[connectors]\ndamping = -1.0\n"), HasSubstr("connectors.damping"));
+  EXPECT_THAT(refusal("[connectors]\ndamping = 60.0\n"), HasSubstr("connectors.damping"));
   EXPECT_THAT(refusal("[connectors]\nclip = \"per_pair\"\noptimizer = \"es\"\n"),
               AllOf(HasSubstr("connectors.clip = per_pair"), HasSubstr("connectors.optimizer = es")));
   // and the consistent combinations pass

@@ -6,7 +6,9 @@
 # - deploy.uniform_agents = held_out and deploy.feature_placement = rear: the analysis stage re-simulates
 #   deploy's episodes bit for bit (deploy_mismatches = 0), agents alone on flat (no features) travel as
 #   under the default placement, and `divcoll export` of a held-out uniform pair and of an agent alone in an
-#   environment with features gives scenes whose simulation reproduces the stored travel bit for bit.
+#   environment with features gives scenes whose simulation reproduces the stored travel bit for bit;
+# - connectors.damping > 0: the same re-simulation and export checks, the exported scene's connector springs
+#   carrying the dashpot.
 # Usage: variant_keys_test.sh DIVCOLL SOURCE_DIR
 set -euo pipefail
 D=$1 SRC=$2
@@ -73,4 +75,28 @@ flat = envs.index("flat")
 assert f["deploy/agents/travel_u"][flat].tobytes() == g["deploy/agents/travel_u"][flat].tobytes()
 print("held_out + rear: exported episodes reproduce the stored travel; flat unchanged")
 EOF
+# connectors.damping: the dashpots reach every scene the stages build and the exported scene files, so the
+# analysis stage re-simulates deploy bit for bit and `divcoll export` + `divcoll simulate` reproduce a pair's travel
+mpirun -np 2 "$D" run "$CFG" 'run.stages=["agents","connectors","deploy","analysis"]' \
+  'connectors.kinds=["weak_uniform","weak_diverse"]' connectors.damping=10 --out "$W/damped.h5" > /dev/null
+h5dump -a /analysis/adversity/deploy_mismatches "$W/damped.h5" | grep -q "(0): 0" || fail "the analysis stage does not reproduce deploy under connectors.damping"
+"$D" export "$W/damped.h5" --what pair --env step_up --type weak_diverse@diverse --replicate 0 --pair 1 --out "$W/d.h5" > /dev/null
+"$D" simulate --scene "$W/d.h5" --steps 200 --out "$W/d_traj.h5" > /dev/null
+/usr/bin/python3 - "$W" <<'EOF2' || fail "connectors.damping"
+import sys, h5py, numpy as np
+w = sys.argv[1]
+f, s = h5py.File(f"{w}/damped.h5", "r"), h5py.File(f"{w}/d.h5", "r")
+c = s["connectors/spring_index"][()].ravel()
+damp = s["springs/damping"][()]
+assert np.all(damp[c] == 10.0) and np.count_nonzero(damp) == len(c), damp
+envs = f["deploy"].attrs["environments"]
+envs = (envs.decode() if isinstance(envs, bytes) else envs).split(",")
+types = f["deploy"].attrs["types"]
+t = (types.decode() if isinstance(types, bytes) else types).split(",").index("weak_diverse@diverse")
+travel = h5py.File(f"{w}/d_traj.h5", "r").attrs["travel"]
+stored = f["deploy/collectives/travel_u"][envs.index("step_up"), t, 0, 1]
+assert travel == stored, (travel, stored)
+print("damping: scene files carry the dashpots; exported episode reproduces the stored travel")
+EOF2
+
 echo "variant keys: passed"
