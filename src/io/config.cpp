@@ -190,6 +190,16 @@ const std::vector<Key>& schema() {
             "connector uses it and scene files carry it (springs/damping). At most 50: a mass in up to 3 connector "
             "springs keeps 2·3·c_s·Δt = 1.2 below the explicit step's limit of 2",
             DIVCOLL_FIELD(connectors.damping)),
+        flag("connectors", "follower", "false",
+             "upper bound: the connector springs exert no elastic or actuation force (their stiffness is 0 in every "
+             "scene, exported ones included), only connectors.damping's dashpot; the controller still runs but "
+             "moves nothing, so its gradient is 0 and training leaves it as initialised. With damping 0 a pair is "
+             "its two agents side by side, untethered: what a collective could travel if nothing held it back, "
+             "telling an optimisation failure from a physical one. A spring whose rest length followed its length "
+             "each step would still push by k·ℓ·a·o through its actuation; with connectors.amplitude = 0 the two "
+             "are the same, and stiffness 0 is the force-free reading for any amplitude. Weak and strong "
+             "connectors are then alike",
+             DIVCOLL_FIELD(connectors.follower)),
         pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
              "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
              "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "

@@ -57,6 +57,7 @@ struct RunConfig {
     double strong_stiffness{};       // spring stiffness of strong connectors
     double amplitude{};              // actuation amplitude of connector springs (fraction of rest length)
     double damping{};                // dashpot c_s of connector springs, 1/s (SPEC §2.2; 0 = SPEC §6.2)
+    bool follower{};                 // connector springs exert no elastic or actuation force (stiffness 0)
     std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
     double clip_norm{};              // gradient norm clip

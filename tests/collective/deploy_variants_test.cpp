@@ -30,6 +30,14 @@ TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
     EXPECT_EQ(collective::tether(damped, kind).damping, 12.5) << kind;
   EXPECT_EQ(collective::strength_tether(damped, "weak").damping, 12.5);
+  // connectors.follower: no stiffness for any kind, the rest kept
+  const io::RunConfig follow = io::apply_overrides(damped, {"connectors.follower=true"});
+  for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
+    EXPECT_EQ(collective::tether(follow, kind).stiffness, 0.0) << kind;
+    EXPECT_EQ(collective::tether(follow, kind).damping, 12.5) << kind;
+    EXPECT_EQ(collective::tether(follow, kind).amplitude, collective::kConnectorAmplitude) << kind;
+  }
+  EXPECT_EQ(collective::strength_tether(follow, "strong").stiffness, 0.0);
   EXPECT_THROW(collective::tether(c, "medium_uniform"), InputError);
   EXPECT_THROW(collective::strength_tether(c, "medium"), InputError);
 }

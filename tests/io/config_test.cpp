@@ -166,6 +166,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.strong_stiffness",
                                              "connectors.amplitude",
                                              "connectors.damping",
+                                             "connectors.follower",
                                              "connectors.optimizer",
                                              "connectors.lr",
                                              "connectors.clip_norm",

@@ -8,7 +8,8 @@
 #   under the default placement, and `divcoll export` of a held-out uniform pair and of an agent alone in an
 #   environment with features gives scenes whose simulation reproduces the stored travel bit for bit;
 # - connectors.damping > 0: the same re-simulation and export checks, the exported scene's connector springs
-#   carrying the dashpot.
+#   carrying the dashpot;
+# - connectors.follower = true (damping 0): a uniform pair on flat travels as its agent alone.
 # Usage: variant_keys_test.sh DIVCOLL SOURCE_DIR
 set -euo pipefail
 D=$1 SRC=$2
@@ -97,6 +98,24 @@ travel = h5py.File(f"{w}/d_traj.h5", "r").attrs["travel"]
 stored = f["deploy/collectives/travel_u"][envs.index("step_up"), t, 0, 1]
 assert travel == stored, (travel, stored)
 print("damping: scene files carry the dashpots; exported episode reproduces the stored travel")
+EOF2
+
+# connectors.follower: connector springs without stiffness; with no dashpot a uniform pair on flat is an agent and
+# its clone side by side, so it travels as the agent alone (up to rounding: the clone starts further ahead)
+mpirun -np 2 "$D" run "$CFG" "${BASE[@]}" connectors.follower=true --out "$W/follower.h5" > /dev/null
+/usr/bin/python3 - "$W" <<'EOF2' || fail "connectors.follower"
+import sys, h5py, numpy as np
+w = sys.argv[1]
+f = h5py.File(f"{w}/follower.h5", "r")
+envs = f["deploy"].attrs["environments"]
+envs = (envs.decode() if isinstance(envs, bytes) else envs).split(",")
+types = (f["deploy"].attrs["types"].decode() if isinstance(f["deploy"].attrs["types"], bytes) else f["deploy"].attrs["types"]).split(",")
+e, t = envs.index("flat"), types.index("weak_uniform@uniform")
+pair = f["deploy/collectives/travel_u"][e, t, 0, :]
+alone = f["deploy/agents/travel_u"][e, :len(pair)]
+assert np.all(f["deploy/collectives/status"][e, t, 0, :] == 0)
+assert np.allclose(pair, alone, rtol=0, atol=1e-9), (pair, alone)
+print("follower: uniform pairs on flat travel as their agent alone", pair, alone)
 EOF2
 
 echo "variant keys: passed"
