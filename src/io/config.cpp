@@ -328,6 +328,12 @@ const std::vector<Key>& schema() {
         num("analysis", "cell_scale", T::Double, "1.0", "(0, 1000]", "1/cell",
             "familiarity cells: PaCMAP coordinates × cell_scale are rounded to integers (1 = the paper's unit "
             "cells; 2 = cells half as wide, ANALYSIS.md §5)", DIVCOLL_FIELD(analysis.cell_scale)),
+        pick("analysis", "familiarity_on", T::Choice, "\"hidden\"", {"hidden", "inputs"},
+             "what the familiarity analysis embeds: hidden = the connector's second hidden layer (32 values, SPEC "
+             "§8.2); inputs = its 11 network inputs, its percepts (SPEC §6.3), at the same sampled (step, spring): "
+             "whether novel environments look new to the connector before its network transforms them. With inputs "
+             "the deploy stage also stores deploy/hidden/{type}/inputs; the hidden states are kept as they are",
+             DIVCOLL_FIELD(analysis.familiarity_on)),
         // [output]
         text("output", "dir", "\"runs\"", "directory of run files and checkpoints",
              DIVCOLL_FIELD(output.dir)),

@@ -205,6 +205,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "analysis.dtw_step",
                                              "analysis.dtw_norm",
                                              "analysis.cell_scale",
+                                             "analysis.familiarity_on",
                                              "output.dir",
                                              "output.checkpoint_every",
                                              "output.checkpoint_interval_s"};
@@ -481,6 +482,7 @@ TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
   EXPECT_THAT(refusal("[deploy]\nfeature_placement = \"behind\"\n"), HasSubstr("deploy.feature_placement"));
   EXPECT_THAT(refusal("[analysis]\ncell_scale = 0.0\n"), HasSubstr("analysis.cell_scale = 0"));
   EXPECT_THAT(refusal("[connectors]\nclip = \"pair\"\n"), HasSubstr("connectors.clip"));
+  EXPECT_THAT(refusal("[analysis]\nfamiliarity_on = \"outputs\"\n"), HasSubstr("analysis.familiarity_on"));
   EXPECT_THAT(refusal("[connectors]\ndamping = -1.0\n"), HasSubstr("connectors.damping"));
   EXPECT_THAT(refusal("[connectors]\ndamping = 60.0\n"), HasSubstr("connectors.damping"));
   EXPECT_THAT(refusal("[connectors]\nclip = \"per_pair\"\noptimizer = \"es\"\n"),
