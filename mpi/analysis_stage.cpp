@@ -82,19 +82,20 @@ void serialize(Ar& ar, FitDone& d, unsigned) {
 
 bool same_bits(double x, double y) { return (std::isnan(x) && std::isnan(y)) || x == y; }
 
-// the finite hidden states of replicate r in environment e (ok episodes only), at most max_states of them
-std::vector<float> states_of(const std::vector<float>& all, int e, int r, int R, int NP, int K, int max_states,
+// the finite states (width `dim`: hidden states or network inputs) of replicate r in environment e (ok episodes
+// only), at most max_states of them
+std::vector<float> states_of(const std::vector<float>& all, int dim, int e, int r, int R, int NP, int K, int max_states,
                              Rng& rng) {
   std::vector<int64_t> rows;
   for (int q = 0; q < NP; ++q)
     for (int k = 0; k < K; ++k) {
       const int64_t row = ((static_cast<int64_t>(e) * R + r) * NP + q) * K + k;
-      const float* s = &all[row * kHidden];
-      if (std::all_of(s, s + kHidden, [](float v) { return std::isfinite(v); })) rows.push_back(row);
+      const float* s = &all[row * dim];
+      if (std::all_of(s, s + dim, [](float v) { return std::isfinite(v); })) rows.push_back(row);
     }
   std::vector<float> out;
   for (int64_t i : sorted_sample(rng, static_cast<int64_t>(rows.size()), max_states))
-    out.insert(out.end(), &all[rows[i] * kHidden], &all[rows[i] * kHidden] + kHidden);
+    out.insert(out.end(), &all[rows[i] * dim], &all[rows[i] * dim] + dim);
   return out;
 }
 
@@ -360,10 +361,11 @@ class AdversityPlan final : public Plan {
 // replicate; Table S1 (finish()) over every environment's counts, restored after a resume
 class FamiliarityPlan final : public Plan {
  public:
-  // hidden: deploy's hidden states of the two types (E × R × NP × K × 32; none when every round is done)
+  // hidden: deploy's states of the two types (E × R × NP × K × dim: hidden states, dim 32, or with
+  // analysis.familiarity_on = inputs the network inputs, dim 11; none when every round is done)
   FamiliarityPlan(const io::RunConfig& cfg, std::vector<std::string> novel, std::array<std::vector<float>, 2> hidden,
-                  int K)
-      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)), K_(K),
+                  int K, int dim)
+      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)), K_(K), dim_(dim),
         hidden_(std::move(hidden)), EN_(static_cast<int>(novel_.size())), NP_(cfg.deploy.pairs),
         R_(cfg.connectors.replicates),
         e_flat_(static_cast<int>(std::find(envs_.begin(), envs_.end(), "flat") - envs_.begin())) {}
@@ -404,11 +406,11 @@ class FamiliarityPlan final : public Plan {
     const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
     const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R_ + r;
     Rng srng = make_rng(cfg_.run.seed, kAnalysisStage + 1, item);
-    std::vector<float> states = states_of(hidden_[t], e_flat_, r, R_, NP_, K_, A_.max_states, srng);
-    const std::vector<float> nov = states_of(hidden_[t], ei, r, R_, NP_, K_, A_.max_states, srng);
+    std::vector<float> states = states_of(hidden_[t], dim_, e_flat_, r, R_, NP_, K_, A_.max_states, srng);
+    const std::vector<float> nov = states_of(hidden_[t], dim_, ei, r, R_, NP_, K_, A_.max_states, srng);
     FitDone d;
-    d.n_train = static_cast<int32_t>(states.size() / kHidden);
-    d.n_novel = static_cast<int32_t>(nov.size() / kHidden);
+    d.n_train = static_cast<int32_t>(states.size() / dim_);
+    d.n_novel = static_cast<int32_t>(nov.size() / dim_);
     states.insert(states.end(), nov.begin(), nov.end());
     const int n = d.n_train + d.n_novel;
     d.counts.assign(6, 0);
@@ -419,7 +421,7 @@ class FamiliarityPlan final : public Plan {
     std::vector<double> X(states.begin(), states.end());
     analysis::PacmapOptions po;
     po.seed = seed_for(cfg_.run.seed, kAnalysisStage + 2, item);
-    const std::vector<double> y = analysis::pacmap_fit(X.data(), n, kHidden, po);
+    const std::vector<double> y = analysis::pacmap_fit(X.data(), n, dim_, po);
     std::vector<uint8_t> label(n, 0);
     std::fill(label.begin() + d.n_train, label.end(), 1);
     std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
@@ -503,6 +505,7 @@ class FamiliarityPlan final : public Plan {
   const std::vector<std::string>& envs_;
   const std::vector<std::string> novel_;
   const int K_;                                     // hidden states per episode
+  const int dim_;                                   // values per state: 32 hidden, or 11 inputs
   const std::array<std::vector<float>, 2> hidden_;  // [type] deploy's hidden states
   const int EN_, NP_, R_, e_flat_;
   std::map<int, std::vector<FitDone>> done_;  // [environment] its fits (several rounds are farmed together)
@@ -574,18 +577,26 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
     std::array<std::vector<float>, 2> hidden;
     int K = 0;
     const int64_t fam_done = stage.has_attribute("familiarity_envs_done") ? stage.read_int("familiarity_envs_done") : 0;
+    // analysis.familiarity_on: the hidden states (SPEC §8.2) or the network inputs at the same samples
+    const bool on_inputs = cfg.analysis.familiarity_on == "inputs";
+    const int dim = on_inputs ? sim::kConnectorInputs : kHidden;
+    const std::string what = on_inputs ? "/inputs" : "/states", axes = on_inputs ? "env,replicate,pair,sample,input"
+                                                                                 : "env,replicate,pair,sample,neuron";
     if (fam_done < static_cast<int64_t>(novel.size()))
       for (int t = 0; t < 2; ++t) {
-        const std::string p = "deploy/hidden/" + kTypes[t] + "/states";
+        const std::string p = "deploy/hidden/" + kTypes[t] + what;
+        DIVCOLL_THROW_UNLESS(!on_inputs || file.has(p), file.file() << ": analysis.familiarity_on = inputs needs " << p
+                                                                    << ", which the deploy stage stores only when it "
+                                                                       "runs with analysis.familiarity_on = inputs");
         // the samples per episode (axis 3) as deploy stored them; the other axes as the config says
-        const Dims d = io::run_file::layout(file, p, "env,replicate,pair,sample,neuron").dims;
-        hidden[t] = io::read_checked<float>(file, p, "env,replicate,pair,sample,neuron", Dims{hE, hR, hNP, d[3], kHidden},
+        const Dims d = io::run_file::layout(file, p, axes).dims;
+        hidden[t] = io::read_checked<float>(file, p, axes, Dims{hE, hR, hNP, d[3], static_cast<hsize_t>(dim)},
                                             std::to_string(hE) + " environments × " + std::to_string(R) +
                                                 " replicates × " + std::to_string(NP) + " pairs × samples × " +
-                                                std::to_string(kHidden) + " neurons");
+                                                std::to_string(dim) + (on_inputs ? " inputs" : " neurons"));
         K = static_cast<int>(d[3]);
       }
-    FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K);
+    FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K, dim);
     drive(comm, cfg, file, familiarity, checkpoint);
   }
 }

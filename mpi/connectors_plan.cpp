@@ -189,7 +189,9 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     for (int c = 0; c < N_; ++c)
       for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
     cu_.assign(N_, kNaN), cb_.assign(N_, kNaN), nn_.assign(N_, 0);
-    sums_.assign(N_, collective::ProbeSum{});
+    collective::ProbeSum empty;
+    empty.pair_clip = collective::pair_clip(collective::opt_settings(cfg_.connectors));  // connectors.clip
+    sums_.assign(N_, empty);
     return items;
   }
   std::string compute(const std::string& item) override {
@@ -345,6 +347,7 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
       int bad_grad = 0, redone = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
         collective::ProbeSum sum;
+        sum.pair_clip = collective::pair_clip(os_);  // connectors.clip
         for (int p = 0; p < counts_[c][w]; ++p, ++q) sum.add(outcome(done_[q]));
         bad_grad += sum.bad_grad, redone += sum.redone;
         if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;

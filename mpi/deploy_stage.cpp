@@ -30,10 +30,11 @@ struct DeployDone {
   std::vector<float> hidden;          // K × 32
   std::vector<int32_t> hidden_index;  // K: step · 5 + connector spring
   double early_bl = 0;                // travel at deploy.early_step, BL (when it is recorded)
+  std::vector<float> inputs;          // K × 11, the network inputs at hidden_index (analysis.familiarity_on = inputs)
 };
 template <class Ar>
 void serialize(Ar& ar, DeployDone& d, unsigned) {
-  ar & d.done & d.hidden & d.hidden_index & d.early_bl;
+  ar & d.done & d.hidden & d.hidden_index & d.early_bl & d.inputs;
 }
 
 // the deployment (SPEC §8) as a plan: one round per environment, one item per episode (every agent alone,
@@ -47,7 +48,7 @@ class DeployPlan final : public Plan {
         NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(cfg.connectors.replicates),
         T_(static_cast<int>(types_.size())), per_episode_(D_.episode_steps * 5),
         K_(D_.hidden_subsample == 0 ? per_episode_ : std::min(per_episode_, (D_.hidden_subsample + NP_ - 1) / NP_)),
-        early_(D_.early_step > 0) {
+        early_(D_.early_step > 0), inputs_(cfg.analysis.familiarity_on == "inputs") {
     // hidden states (SPEC §8.2) of the weak connectors deployed as trained, at most deploy.hidden_subsample
     // per (type, replicate, environment): K per episode, drawn from the episode's own stream
     for (int t = 0; t < T_; ++t)
@@ -105,6 +106,7 @@ class DeployPlan final : public Plan {
       if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / collective::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
+      opt.record_inputs = hidden && inputs_;
       o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, opt, &full);
       if (early_)
         d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D_.early_step) /
@@ -119,6 +121,13 @@ class DeployPlan final : public Plan {
         if (o.status == sim::Status::ok)
           for (size_t k = 0; k < d.hidden_index.size(); ++k)
             for (int q = 0; q < 32; ++q) d.hidden[k * 32 + q] = static_cast<float>(full.hidden[d.hidden_index[k] * 32 + q]);
+        if (inputs_) {
+          constexpr int I = sim::kConnectorInputs;
+          d.inputs.assign(d.hidden_index.size() * I, std::numeric_limits<float>::quiet_NaN());
+          if (o.status == sim::Status::ok)
+            for (size_t k = 0; k < d.hidden_index.size(); ++k)
+              for (int q = 0; q < I; ++q) d.inputs[k * I + q] = static_cast<float>(full.inputs[d.hidden_index[k] * I + q]);
+        }
       }
     }
     d.done = EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
@@ -132,6 +141,7 @@ class DeployPlan final : public Plan {
     type_mean_.assign(T_, 0.0), type_ok_.assign(T_, 0), type_bad_.assign(T_, 0);
     std::vector<std::vector<float>> hid(hidden_types_.size());
     std::vector<std::vector<int32_t>> hid_index(hidden_types_.size());
+    std::vector<std::vector<float>> hid_inputs(hidden_types_.size());
     for (size_t q = 0; q < done_.size(); ++q) {
       const DeployDone& dd = done_[q];
       const EpisodeDone& d = dd.done;
@@ -141,6 +151,7 @@ class DeployPlan final : public Plan {
         const int h = static_cast<int>(std::find(hidden_types_.begin(), hidden_types_.end(), t) - hidden_types_.begin());
         hid[h].insert(hid[h].end(), dd.hidden.begin(), dd.hidden.end());
         hid_index[h].insert(hid_index[h].end(), dd.hidden_index.begin(), dd.hidden_index.end());
+        hid_inputs[h].insert(hid_inputs[h].end(), dd.inputs.begin(), dd.inputs.end());
       }
       (alone ? au : cu).push_back(d.travel_u);
       (alone ? ab : cb).push_back(d.travel_bl);
@@ -170,6 +181,9 @@ class DeployPlan final : public Plan {
     for (size_t h = 0; h < hidden_types_.size(); ++h) {
       out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/states", {E, R, N, K, 32}, {ei}, hid[h]});
       out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/index", {E, R, N, K}, {ei}, hid_index[h]});
+      if (inputs_)
+        out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/inputs",
+                       {E, R, N, K, static_cast<uint64_t>(sim::kConnectorInputs)}, {ei}, hid_inputs[h]});
     }
     return out;
   }
@@ -195,6 +209,7 @@ class DeployPlan final : public Plan {
   const std::vector<bool> diverse_;
   const int E_, NP_, pop_, R_, T_, per_episode_, K_;
   const bool early_;  // deploy.early_step: travel at that step too (from the recorded run)
+  const bool inputs_;  // analysis.familiarity_on = inputs: the connectors' inputs beside the hidden states
   std::vector<int> hidden_types_;
   std::vector<std::pair<int, int>> diverse_pairs_, uniform_pairs_;
   sim::Simulator sim_;

@@ -67,7 +67,8 @@ std::vector<std::string> sections_before(const std::string& stage) {
   return out;
 }
 
-// --from: the keys of the stages before `from` (and run.seed, run.precision) must be the base's; returns the
+// --from: the keys of the stages before `from` (and run.seed, run.precision; analysis.familiarity_on, which the
+// deploy stage reads, when deploy is before `from`) must be the base's; returns the
 // differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
 std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
   const auto a = io::flat(base), b = io::flat(now);
@@ -75,7 +76,10 @@ std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& no
   std::string diff;
   for (size_t i = 0; i < a.size(); ++i) {
     const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
-    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" ||
+    // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
+    const bool deploy_reads = a[i].first == "analysis.familiarity_on" &&
+                              std::find(secs.begin(), secs.end(), "deploy") != secs.end();
+    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || deploy_reads ||
                        std::find(secs.begin(), secs.end(), sec) != secs.end();
     if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
   }

@@ -73,7 +73,7 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
     s.rest_length.push_back(std::sqrt(dx * dx + dy * dy));
     s.stiffness.push_back(t.stiffness);
     s.amplitude.push_back(t.amplitude);
-    s.damping.push_back(0.0);
+    s.damping.push_back(t.damping);
   }
 }
 

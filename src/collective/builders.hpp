@@ -31,10 +31,11 @@ struct Agent {
 // relative actuation amplitude of a connector's springs (SPEC §6.2; config key connectors.amplitude)
 inline constexpr double kConnectorAmplitude = 0.6;
 
-// the springs of one connector (SPEC §6.2): all 5 get this stiffness and amplitude
+// the springs of one connector (SPEC §6.2): all 5 get this stiffness, amplitude and dashpot
 struct Tether {
   double stiffness = 0;                    // force/u (per unit mass)
   double amplitude = kConnectorAmplitude;  // fraction of its rest length a spring's target length moves (0 = passive)
+  double damping = 0;                      // dashpot c_s, 1/s (SPEC §2.2; 0 = SPEC §6.2; connectors.damping)
 };
 // the paper reading's two connector kinds (SPEC §6.2; config keys connectors.weak_stiffness, strong_stiffness)
 inline constexpr Tether kWeakConnector{5e3};

@@ -9,11 +9,12 @@
 namespace divcoll::collective {
 
 Tether tether(const io::RunConfig& cfg, std::string_view kind) {
-  return {io::stiffness(cfg, kind), cfg.connectors.amplitude};
+  return {cfg.connectors.follower ? 0.0 : io::stiffness(cfg, kind), cfg.connectors.amplitude, cfg.connectors.damping};
 }
 
 Tether strength_tether(const io::RunConfig& cfg, std::string_view strength) {
-  return {io::strength_stiffness(cfg, strength), cfg.connectors.amplitude};
+  return {cfg.connectors.follower ? 0.0 : io::strength_stiffness(cfg, strength), cfg.connectors.amplitude,
+          cfg.connectors.damping};
 }
 
 std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg) {

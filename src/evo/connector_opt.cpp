@@ -53,7 +53,17 @@ void ProbeSum::add(const PairOutcome& o) {
   sb += o.travel_bl;
   if (!o.grad.empty()) {
     if (g.empty()) g.assign(o.grad.size(), 0.0);
-    for (size_t q = 0; q < g.size(); ++q) g[q] += o.grad[q];
+    double scale = 1.0;
+    if (pair_clip > 0) {
+      double n2 = 0;
+      for (double x : o.grad) n2 += x * x;
+      const double n = std::sqrt(n2);
+      if (n > pair_clip) scale = pair_clip / n;
+    }
+    if (scale == 1.0)
+      for (size_t q = 0; q < g.size(); ++q) g[q] += o.grad[q];
+    else
+      for (size_t q = 0; q < g.size(); ++q) g[q] += o.grad[q] * scale;
   }
 }
 
@@ -260,13 +270,14 @@ std::vector<std::pair<int, int>> validation_pairs(bool diverse, int n, int batch
 
 ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, int steps, int bptt_window) {
+                      const Tether& tether, int steps, int bptt_window, double pair_clip) {
   sim::RunOptions opt;
   opt.steps = steps;
   opt.grad = grad;
   opt.agent_param_grad = false;  // the agents stay frozen
   opt.grad_window = bptt_window;
   ProbeSum sum;
+  sum.pair_clip = pair_clip;
   for (const auto& [a, b] : pairs) sum.add(run_pair(sim, agents[a], agents[b], weights, tether, "flat", opt, nullptr));
   return sum.mean();
 }
@@ -294,7 +305,8 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
     }
     std::vector<ProbeResult> rs;
     for (const Probe& p : opt.ask(it)) {
-      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.episode_steps, s.bptt_window));
+      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.episode_steps, s.bptt_window,
+                             pair_clip(s)));
       (p.grad ? out.pair_episodes_grad : out.pair_episodes_fwd) += static_cast<long>(batch.size());
     }
     const double v = validate();

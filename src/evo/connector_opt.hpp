@@ -4,6 +4,8 @@
 // - a decaying rate (lr_schedule: cosine or exponential to lr·lr_final at the last iteration);
 // - keep-best: the weights scored best on a fixed validation batch, instead of the last ones;
 // - truncated backpropagation (bptt_window, sim::RunOptions::grad_window);
+// - per-pair clipping (clip = per_pair): each pair's gradient scaled down to clip_norm before the batch mean
+//   (ProbeSum::pair_clip), instead of clipping only the mean; works with the plain and the extended method;
 // - gradient averaging (grad_samples, grad_sigma): Gaussian smoothing of the batch objective, the gradient
 //   averaged at antithetic perturbations θ ± σε of the weights on the same batch;
 // - black-box controls, no gradient: CMA-ES (pagmo2's cmaes) over the 1473 weights, fitness = −mean batch
@@ -44,12 +46,16 @@ struct OptSettings {
   bool keep_best = false;                // return the validation-best weights
   int es_popsize = 16;                   // cmaes / es candidates per iteration
   double es_sigma = 0.02;                // cmaes initial sd per weight; es perturbation sd per weight
+  std::string clip = "global";           // global | per_pair: clip_norm clips the batch mean or each pair's gradient
 };
 template <class Connectors>
 OptSettings opt_settings(const Connectors& c) {
   return {c.optimizer,    c.lr,          c.clip_norm, c.lr_schedule, c.lr_final,  c.bptt_window,
-          c.grad_samples, c.grad_sigma,  c.keep_best, c.es_popsize,  c.es_sigma};
+          c.grad_samples, c.grad_sigma,  c.keep_best, c.es_popsize,  c.es_sigma, c.clip};
 }
+// the norm each pair's gradient is scaled down to before the batch sum: clip_norm with clip = per_pair, else 0
+// (no per-pair clipping; ProbeSum::pair_clip)
+inline double pair_clip(const OptSettings& s) { return s.clip == "per_pair" ? s.clip_norm : 0.0; }
 // true if any key asks for more than the plain method (the connectors stage then trains through ConnectorOptimizer)
 bool extended(const OptSettings& s);
 
@@ -73,6 +79,8 @@ struct ProbeResult {
 // ran, but whose backward pass overflowed) counts as not ok, as an episode that failed does: one such pair would
 // otherwise turn the connector's weights into NaN at the next step
 struct ProbeSum {
+  double pair_clip = 0;  // > 0: each ok pair's gradient is scaled down to this norm if longer before it is added
+                         // (connectors.clip = per_pair); 0 = added as it is
   double su = 0, sb = 0;
   int ok = 0, not_ok = 0, bad_grad = 0, redone = 0;
   std::vector<double> g;
@@ -168,6 +176,6 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
 // one probe over a list of pairs in a plain loop (grad with the window of `s`)
 ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, int steps, int bptt_window);
+                      const Tether& tether, int steps, int bptt_window, double pair_clip = 0);
 
 }  // namespace divcoll::collective

@@ -184,6 +184,22 @@ const std::vector<Key>& schema() {
             "actuation amplitude of connector springs, a fraction of their rest length (SPEC §6.2 reads the paper "
             "as 0.6; 0 = passive tethers); every stage that builds a connector uses it",
             DIVCOLL_FIELD(connectors.amplitude)),
+        num("connectors", "damping", T::Double, "0.0", "[0, 50]", "1/s",
+            "dashpot c_s of the 5 connector springs: the force −c_s·((v_i − v_j)·d̂)·d̂ per unit mass of SPEC §2.2 "
+            "(SPEC §6.2 has 0, the default), damping how fast a connector stretches; every stage that builds a "
+            "connector uses it and scene files carry it (springs/damping). At most 50: a mass in up to 3 connector "
+            "springs keeps 2·3·c_s·Δt = 1.2 below the explicit step's limit of 2",
+            DIVCOLL_FIELD(connectors.damping)),
+        flag("connectors", "follower", "false",
+             "upper bound: the connector springs exert no elastic or actuation force (their stiffness is 0 in every "
+             "scene, exported ones included), only connectors.damping's dashpot; the controller still runs but "
+             "moves nothing, so its gradient is 0 and training leaves it as initialised. With damping 0 a pair is "
+             "its two agents side by side, untethered: what a collective could travel if nothing held it back, "
+             "telling an optimisation failure from a physical one. A spring whose rest length followed its length "
+             "each step would still push by k·ℓ·a·o through its actuation; with connectors.amplitude = 0 the two "
+             "are the same, and stiffness 0 is the force-free reading for any amplitude. Weak and strong "
+             "connectors are then alike",
+             DIVCOLL_FIELD(connectors.follower)),
         pick("connectors", "optimizer", T::Choice, "\"adam\"", {"adam", "normalized", "cmaes", "es"},
              "connector optimizer: adam, normalized = θ ← θ − lr·g/‖g‖, or a black-box evolution strategy on the "
              "batch travel, no gradient: cmaes = CMA-ES (pagmo2; O(es_popsize·1473³) per iteration), es = "
@@ -191,8 +207,14 @@ const std::vector<Key>& schema() {
              DIVCOLL_FIELD(connectors.optimizer)),
         num("connectors", "lr", T::Double, "0.003", "(0, 1]", "", "learning rate (adam) or step (normalized)",
             DIVCOLL_FIELD(connectors.lr)),
-        num("connectors", "clip_norm", T::Double, "1.0", "(0, 1e6]", "", "global gradient-norm clip",
+        num("connectors", "clip_norm", T::Double, "1.0", "(0, 1e6]", "", "gradient-norm clip (see clip)",
             DIVCOLL_FIELD(connectors.clip_norm)),
+        pick("connectors", "clip", T::Choice, "\"global\"", {"global", "per_pair"},
+             "what clip_norm clips: global = the batch-mean gradient before an Adam step (SPEC §6.4; normalized "
+             "steps ignore clip_norm); per_pair = each pair's gradient, scaled down to clip_norm before the batch "
+             "mean (adam and normalized), so a few pairs whose backpropagation explodes cannot set the step's "
+             "direction. Not with cmaes or es (no gradient)",
+             DIVCOLL_FIELD(connectors.clip)),
         num("connectors", "init_out_gain", T::Double, "0.1", "[0, 10]", "",
             "initial weights of the connector's output layer ~ N(0, (gain·sqrt(2/(in+out)))²); 3 as the agent's, "
             "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
@@ -306,6 +328,12 @@ const std::vector<Key>& schema() {
         num("analysis", "cell_scale", T::Double, "1.0", "(0, 1000]", "1/cell",
             "familiarity cells: PaCMAP coordinates × cell_scale are rounded to integers (1 = the paper's unit "
             "cells; 2 = cells half as wide, ANALYSIS.md §5)", DIVCOLL_FIELD(analysis.cell_scale)),
+        pick("analysis", "familiarity_on", T::Choice, "\"hidden\"", {"hidden", "inputs"},
+             "what the familiarity analysis embeds: hidden = the connector's second hidden layer (32 values, SPEC "
+             "§8.2); inputs = its 11 network inputs, its percepts (SPEC §6.3), at the same sampled (step, spring): "
+             "whether novel environments look new to the connector before its network transforms them. With inputs "
+             "the deploy stage also stores deploy/hidden/{type}/inputs; the hidden states are kept as they are",
+             DIVCOLL_FIELD(analysis.familiarity_on)),
         // [output]
         text("output", "dir", "\"runs\"", "directory of run files and checkpoints",
              DIVCOLL_FIELD(output.dir)),
@@ -705,6 +733,11 @@ void check_combinations(const RunConfig& c) {
                        "connectors.weak_stiffness = " << double_text(c.connectors.weak_stiffness)
                                                       << " must be less than connectors.strong_stiffness = "
                                                       << double_text(c.connectors.strong_stiffness));
+  DIVCOLL_THROW_UNLESS(c.connectors.clip != "per_pair" ||
+                           (c.connectors.optimizer != "cmaes" && c.connectors.optimizer != "es"),
+                       "connectors.clip = per_pair clips each pair's gradient, but connectors.optimizer = "
+                           << c.connectors.optimizer << " uses no gradient (set clip = \"global\" or a gradient "
+                           << "optimizer: adam, normalized)");
   // uniform batches and deployments pair agent i with its clone, i < count
   const auto& kinds = c.connectors.kinds;
   if (stage_enabled(c, "connectors") && (listed(kinds, "weak_uniform") || listed(kinds, "strong_uniform"))) {

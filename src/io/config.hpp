@@ -56,9 +56,12 @@ struct RunConfig {
     double weak_stiffness{};         // spring stiffness of weak connectors
     double strong_stiffness{};       // spring stiffness of strong connectors
     double amplitude{};              // actuation amplitude of connector springs (fraction of rest length)
+    double damping{};                // dashpot c_s of connector springs, 1/s (SPEC §2.2; 0 = SPEC §6.2)
+    bool follower{};                 // connector springs exert no elastic or actuation force (stiffness 0)
     std::string optimizer;           // adam | normalized | cmaes
     double lr{};                     // learning rate (Adam) or step (normalized)
-    double clip_norm{};              // global gradient norm clip
+    double clip_norm{};              // gradient norm clip
+    std::string clip;                // global | per_pair: what clip_norm clips (the batch mean or each pair's gradient)
     double init_out_gain{};          // init gain of the connector network's output layer
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
     std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
@@ -108,6 +111,7 @@ struct RunConfig {
     std::string dtw_step;        // symmetric1 | symmetric2
     std::string dtw_norm;        // path_length | sum_lengths | max_length (ANALYSIS.md §2.4)
     double cell_scale{};         // familiarity cells: round(cell_scale · PaCMAP coordinate)
+    std::string familiarity_on;  // hidden | inputs: what the familiarity PaCMAP embeds (SPEC §8.2: hidden)
     bool operator==(const Analysis&) const = default;
   };
   struct Output {

@@ -73,6 +73,7 @@ std::vector<Axis> make_axes() {
       {"mass", Labels::none, "", static_cast<hsize_t>(sim::kAgentMasses), "a point mass of an agent"},
       {"spring", Labels::none, "", static_cast<hsize_t>(sim::kAgentSprings), "a spring of an agent"},
       {"neuron", Labels::none, "", static_cast<hsize_t>(sim::kHidden), "a unit of the connector's second hidden layer"},
+      {"input", Labels::none, "", static_cast<hsize_t>(sim::kConnectorInputs), "an input of the connector's network (SPEC §6.3)"},
       {"component", Labels::none, "", 2, "a coordinate of the 2-D PaCMAP embedding"},
       fixed("xy", "x,y", "a coordinate"),
       fixed("descriptor", "height,width,aspect,compact,cx,cy,sd_y,sym_v,sym_h", "an entry of the behaviour descriptor (SPEC §4.2)"),
@@ -182,6 +183,9 @@ std::vector<Entry> base_entries() {
       D("deploy/hidden/{type}/states", "float32", "env,replicate,pair,sample,neuron", "1",
         "the connector's second hidden layer at the sampled (step, spring); NaN if the episode was not ok"),
       D("deploy/hidden/{type}/index", "int32", "env,replicate,pair,sample", "index", "which: step · 5 + connector spring"),
+      O("deploy/hidden/{type}/inputs", "float32", "env,replicate,pair,sample,input", "1",
+        "the connector's network inputs at the same sampled (step, spring) (only when analysis.familiarity_on = "
+        "inputs); NaN if the episode was not ok"),
       // specialists (SPEC §7.3)
       G("specialists", "status,environments,replicates,iterations_done,envs_done," + kTiming,
         "weak connectors trained on diverse pairs in each novel environment (environments = the novel ones)"),

@@ -198,6 +198,8 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
     res.touch.assign(static_cast<size_t>(T + 1) * N, 0);
   }
   if (opt.record_hidden && m.C > 0) res.hidden.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * cols * 32);
+  if (opt.record_inputs && m.C > 0)
+    res.inputs.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * cols * kConnectorInputs);
 
   // state 0: x = x0, v = 0, o = 0, τ = 0
   std::copy(sc.x0.begin(), sc.x0.end(), xs.begin());
@@ -221,6 +223,10 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
       if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
         const auto* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * cols;
         res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * cols);
+      }
+      if (opt.record_inputs && m.C > 0 && t % opt.hidden_every == 0) {
+        const auto* in = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(0)) * cols;
+        res.inputs.insert(res.inputs.end(), in, in + static_cast<size_t>(kConnectorInputs) * cols);
       }
     };
     if (fl) control(ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc});

@@ -47,6 +47,8 @@ struct RunOptions {
   bool record = false;           // keep x, v, touch at every step for output
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
+  bool record_inputs = false;    // keep the connectors' network inputs (11 per connector spring, SPEC §6.3) at the
+                                 // steps where hidden states are recorded (every hidden_every steps)
   double speed_limit = 100.0;    // u/s; a mass faster than this marks the episode unstable
   bool float_networks = default_float_networks();  // the controllers' networks in float (inputs, weights, activations and their
                                  // gradients; nn/mlp.hpp's float kernels), the physics in double: faster, and not
@@ -84,6 +86,8 @@ struct RunResult {
   std::vector<uint8_t> touch;      // ((T+1) x N)
   // with record_hidden: (n_records x C*5 x 32), n_records = ceil(T / hidden_every)
   std::vector<double> hidden;
+  // with record_inputs: (n_records x C*5 x 11), the networks' inputs at those steps
+  std::vector<double> inputs;
 };
 
 class Simulator {

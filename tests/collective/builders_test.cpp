@@ -105,12 +105,15 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   const sim::Scene g = collective::pair_scene(p, a, s.connector_params, collective::kWeakConnector, "gap");
   EXPECT_NEAR(g.env.terrain[1].x_start, max_x_of(g, 1) + 0.05, 1e-15);
   // a tether of another stiffness and amplitude reaches the 5 connector springs and no agent spring
-  const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25}, "flat");
+  const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25, 7.5}, "flat");
   for (int r = 0; r < 5; ++r) {
     EXPECT_EQ(t.stiffness[t.connector_spring_index[r]], 1234.5);
     EXPECT_EQ(t.amplitude[t.connector_spring_index[r]], 0.25);
+    EXPECT_EQ(t.damping[t.connector_spring_index[r]], 7.5);
+    EXPECT_EQ(s.damping[s.connector_spring_index[r]], 0.0);  // SPEC §6.2: no dashpot by default
   }
   for (int sp : t.agent_spring_index) EXPECT_EQ(t.amplitude[sp], s.amplitude[sp]);
+  for (int sp : t.agent_spring_index) EXPECT_EQ(t.damping[sp], 0.0);
 }
 
 TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
@@ -131,6 +134,10 @@ TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
   }
   for (int k = 1; k < 7; ++k) EXPECT_LT(max_x_of(s, k), min_x_of(s, 0)) << "agent 0 is front-most";
   EXPECT_THROW(collective::chain_scene({ptr[0]}, s.connector_params, collective::kWeakConnector, "flat"), InputError);
+  // a chain's every connector spring gets the tether's dashpot, no agent spring does
+  const sim::Scene d = collective::chain_scene(ptr, s.connector_params, collective::Tether{5e3, 0.6, 3.0}, "flat");
+  for (int sp : d.connector_spring_index) EXPECT_EQ(d.damping[sp], 3.0);
+  for (int sp : d.agent_spring_index) EXPECT_EQ(d.damping[sp], 0.0);
 }
 
 }  // namespace

@@ -79,6 +79,47 @@ TEST(ConnectorOpt, APairRedoneInDoubleCountsInTheMeanAndIsCounted) {
   EXPECT_EQ(r.grad, (std::vector<double>{2.0, 1.0}));
 }
 
+// connectors.clip: a batch of four pairs whose gradients point along +x (norm 0.5) and one exploding pair along
+// +y (norm 1000). Global clipping (the default) clips the batch mean, whose direction the exploding pair sets;
+// per_pair clips each pair's gradient to clip_norm first, so the four others set the direction of the step
+// (a normalized step, θ ← θ − lr·g/‖g‖, moves along the mean gradient; Adam's first step is lr·sign per weight)
+TEST(ConnectorOpt, PerPairClippingKeepsAnExplodingPairFromSettingTheDirection) {
+  std::vector<collective::PairOutcome> batch(5);
+  for (int k = 0; k < 4; ++k) batch[k].travel_u = 0.1, batch[k].travel_bl = 0.5, batch[k].grad = {0.5, 0.0};
+  batch[4].travel_u = 0.1, batch[4].travel_bl = 0.5, batch[4].grad = {0.0, 1000.0};
+  auto step = [&](const std::string& clip) {
+    OptSettings s;
+    s.clip = clip;
+    s.clip_norm = 1.0;
+    collective::ProbeSum sum;
+    sum.pair_clip = collective::pair_clip(s);
+    for (const auto& o : batch) sum.add(o);
+    ProbeResult r = sum.mean();
+    for (double& x : r.grad) x = -x;  // loss = −travel, as the connectors stage
+    std::vector<double> p = {0.0, 0.0};
+    evo::normalized_step(p, r.grad, 0.01);
+    return std::pair{r.grad, p};
+  };
+  const auto [gg, pg] = step("global");
+  const auto [gp, pp] = step("per_pair");
+  // the mean loss gradients: global −(2, 1000)/5, per_pair −(2, 1)/5
+  EXPECT_DOUBLE_EQ(gg[0], -0.4);
+  EXPECT_DOUBLE_EQ(gg[1], -200.0);
+  EXPECT_DOUBLE_EQ(gp[0], -0.4);
+  EXPECT_DOUBLE_EQ(gp[1], -0.2);
+  // the steps (both of length 0.01): global almost all along the exploding pair's y, per_pair mostly along x
+  EXPECT_GT(pg[1], 100 * pg[0]);
+  EXPECT_GT(pg[0], 0.0);
+  EXPECT_DOUBLE_EQ(pp[0], 0.01 * 2 / std::sqrt(5.0));
+  EXPECT_DOUBLE_EQ(pp[1], 0.01 * 1 / std::sqrt(5.0));
+  // per_pair leaves pairs within clip_norm bit for bit as the default does
+  collective::ProbeSum a, b;
+  b.pair_clip = 1.0;
+  for (int k = 0; k < 4; ++k) a.add(batch[k]), b.add(batch[k]);
+  EXPECT_EQ(a.mean().grad, b.mean().grad);
+  EXPECT_EQ(collective::pair_clip(OptSettings{}), 0.0);  // the default: no per-pair clipping
+}
+
 TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
   OptSettings s;
   s.lr = 0.01;

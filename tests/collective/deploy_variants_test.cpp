@@ -24,6 +24,20 @@ TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   EXPECT_EQ(collective::tether(c, "strong_uniform").stiffness, 9000.0);
   EXPECT_EQ(collective::strength_tether(c, "weak").stiffness, 700.0);
   EXPECT_EQ(collective::strength_tether(c, "strong").amplitude, 0.3);
+  // connectors.damping: every kind's dashpot, 0 by default (SPEC §6.2)
+  EXPECT_EQ(collective::tether(d, "weak_uniform").damping, 0.0);
+  const io::RunConfig damped = io::apply_overrides(d, {"connectors.damping=12.5"});
+  for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
+    EXPECT_EQ(collective::tether(damped, kind).damping, 12.5) << kind;
+  EXPECT_EQ(collective::strength_tether(damped, "weak").damping, 12.5);
+  // connectors.follower: no stiffness for any kind, the rest kept
+  const io::RunConfig follow = io::apply_overrides(damped, {"connectors.follower=true"});
+  for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
+    EXPECT_EQ(collective::tether(follow, kind).stiffness, 0.0) << kind;
+    EXPECT_EQ(collective::tether(follow, kind).damping, 12.5) << kind;
+    EXPECT_EQ(collective::tether(follow, kind).amplitude, collective::kConnectorAmplitude) << kind;
+  }
+  EXPECT_EQ(collective::strength_tether(follow, "strong").stiffness, 0.0);
   EXPECT_THROW(collective::tether(c, "medium_uniform"), InputError);
   EXPECT_THROW(collective::strength_tether(c, "medium"), InputError);
 }

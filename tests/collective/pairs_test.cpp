@@ -6,7 +6,9 @@
 #include <ostream>
 #include <set>
 
+#include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "io/config.hpp"
 #include "morph/body.hpp"
 #include "testing.hpp"
 
@@ -107,6 +109,60 @@ TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot
   double gn = 0;
   for (double g : c.grad) gn += g * g;
   EXPECT_GT(gn, 0.0);
+}
+
+// connectors.follower: the connector springs exert no force, so with no dashpot each agent of a pair moves exactly
+// as it does alone from the same start (its masses' positions equal at every step, bit for bit); the connector's
+// weights change nothing and get a zero gradient. With a dashpot the agents feel each other again
+TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
+  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  Rng rng = make_rng(5, 10, 0);
+  const std::vector<double> w = morph::init_connector_params(rng, 1.0);
+  const io::RunConfig cfg = io::apply_overrides(io::default_config(), {"connectors.follower=true"});
+  const collective::Tether follower = collective::tether(cfg, "weak_diverse");
+  ASSERT_EQ(follower.stiffness, 0.0);
+  ASSERT_EQ(follower.damping, 0.0);
+  const int T = 400;
+  sim::RunOptions opt;
+  opt.steps = T;
+  opt.record = true;
+  const sim::Scene pair = collective::pair_scene(agents[0], agents[1], w, follower, "flat");
+  const sim::RunResult pr = sim::simulate(pair, opt);
+  ASSERT_EQ(pr.status, sim::Status::ok);
+  const int N = pair.n_masses();
+  for (int k = 0; k < 2; ++k) {
+    sim::Scene alone = collective::agent_scene(agents[k], "flat");
+    for (int q = 0; q < sim::kAgentMasses; ++q) {
+      const int i = pair.agent_mass_index[k * sim::kAgentMasses + q];
+      alone.x0[2 * q] = pair.x0[2 * i], alone.x0[2 * q + 1] = pair.x0[2 * i + 1];
+    }
+    alone.env = pair.env;
+    const sim::RunResult ar = sim::simulate(alone, opt);
+    ASSERT_EQ(ar.status, sim::Status::ok);
+    double moved = 0;
+    for (int t = 0; t <= T; ++t)
+      for (int q = 0; q < sim::kAgentMasses; ++q) {
+        const int i = pair.agent_mass_index[k * sim::kAgentMasses + q];
+        for (int c = 0; c < 2; ++c) {
+          ASSERT_EQ(pr.x[(static_cast<size_t>(t) * N + i) * 2 + c], ar.x[(static_cast<size_t>(t) * sim::kAgentMasses + q) * 2 + c])
+              << "agent " << k << " mass " << q << " step " << t;
+          ASSERT_EQ(pr.v[(static_cast<size_t>(t) * N + i) * 2 + c], ar.v[(static_cast<size_t>(t) * sim::kAgentMasses + q) * 2 + c]);
+        }
+        moved = std::max(moved, std::abs(ar.x[(static_cast<size_t>(t) * sim::kAgentMasses + q) * 2] - alone.x0[2 * q]));
+      }
+    EXPECT_GT(moved, 0.01) << "agent " << k << " barely moved: the comparison says little";
+  }
+  // the controller runs but moves nothing: other weights, the same travel, a zero gradient
+  sim::Simulator sim;
+  const std::vector<double> w2 = morph::init_connector_params(rng, 1.0);
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, follower, "flat", T, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, follower, "flat", T, true);
+  EXPECT_EQ(a.travel_u, b.travel_u);
+  for (double g : a.grad) EXPECT_EQ(g, 0.0);
+  // a dashpot couples the two again
+  const collective::Tether damped =
+      collective::tether(io::apply_overrides(cfg, {"connectors.damping=20"}), "weak_diverse");
+  EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", T, false).travel_u, a.travel_u);
 }
 
 TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithItself) {

@@ -165,9 +165,12 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.weak_stiffness",
                                              "connectors.strong_stiffness",
                                              "connectors.amplitude",
+                                             "connectors.damping",
+                                             "connectors.follower",
                                              "connectors.optimizer",
                                              "connectors.lr",
                                              "connectors.clip_norm",
+                                             "connectors.clip",
                                              "connectors.init_out_gain",
                                              "connectors.kinds",
                                              "connectors.lr_schedule",
@@ -202,6 +205,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "analysis.dtw_step",
                                              "analysis.dtw_norm",
                                              "analysis.cell_scale",
+                                             "analysis.familiarity_on",
                                              "output.dir",
                                              "output.checkpoint_every",
                                              "output.checkpoint_interval_s"};
@@ -477,12 +481,19 @@ TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
               AllOf(HasSubstr("connectors.batch_pairs + deploy.pairs = 200"), HasSubstr("agents.population = 100")));
   EXPECT_THAT(refusal("[deploy]\nfeature_placement = \"behind\"\n"), HasSubstr("deploy.feature_placement"));
   EXPECT_THAT(refusal("[analysis]\ncell_scale = 0.0\n"), HasSubstr("analysis.cell_scale = 0"));
+  EXPECT_THAT(refusal("[connectors]\nclip = \"pair\"\n"), HasSubstr("connectors.clip"));
+  EXPECT_THAT(refusal("[analysis]\nfamiliarity_on = \"outputs\"\n"), HasSubstr("analysis.familiarity_on"));
+  EXPECT_THAT(refusal("[connectors]\ndamping = -1.0\n"), HasSubstr("connectors.damping"));
+  EXPECT_THAT(refusal("[connectors]\ndamping = 60.0\n"), HasSubstr("connectors.damping"));
+  EXPECT_THAT(refusal("[connectors]\nclip = \"per_pair\"\noptimizer = \"es\"\n"),
+              AllOf(HasSubstr("connectors.clip = per_pair"), HasSubstr("connectors.optimizer = es")));
   // and the consistent combinations pass
   const RunConfig ok = parse_config("", "test", {"deploy.early_step=1000", "analysis.alone_protocol=training_length",
                                                  "agents.population=150", "connectors.batch_pairs=50",
                                                  "deploy.uniform_agents=held_out"});
   EXPECT_EQ(ok.deploy.early_step, 1000);
   EXPECT_EQ(ok.deploy.uniform_agents, "held_out");
+  EXPECT_EQ(parse_config("", "test", {"connectors.clip=per_pair"}).connectors.clip, "per_pair");
 }
 
 }  // namespace divcoll::io

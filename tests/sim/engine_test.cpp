@@ -311,6 +311,38 @@ TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
   }
 }
 
+// record_inputs (analysis.familiarity_on = inputs): the connectors' 11 network inputs per spring (SPEC §6.3) at the
+// steps where hidden states are recorded, beside them; recording changes nothing else. At step 0 the velocities and
+// touch flags are 0 and every spring is at its rest length (ℓ/L = 1 up to ε)
+TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
+  const testing::GradientPair& f = testing::gradient_pair();
+  const sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat");
+  sim::RunOptions opt;
+  opt.steps = 60;
+  opt.record_hidden = true;
+  opt.hidden_every = 7;
+  const sim::RunResult h = sim::simulate(s, opt);
+  opt.record_inputs = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok);
+  EXPECT_EQ(r.travel, h.travel);
+  EXPECT_EQ(r.hidden, h.hidden);
+  EXPECT_TRUE(h.inputs.empty());
+  const size_t records = (60 + 7 - 1) / 7, cols = 5;
+  ASSERT_EQ(r.hidden.size(), records * cols * sim::kHidden);
+  ASSERT_EQ(r.inputs.size(), records * cols * sim::kConnectorInputs);
+  for (size_t c = 0; c < cols; ++c) {
+    const double* in = &r.inputs[c * sim::kConnectorInputs];
+    for (int q = 4; q < 10; ++q) EXPECT_EQ(in[q], 0.0) << "spring " << c << " input " << q;
+    EXPECT_NEAR(in[10], 1.0, 1e-9);
+  }
+  // later records move
+  double moved = 0;
+  for (size_t q = 0; q < r.inputs.size() / records; ++q)
+    moved = std::max(moved, std::abs(r.inputs[(records - 1) * cols * sim::kConnectorInputs + q] - r.inputs[q]));
+  EXPECT_GT(moved, 1e-3);
+}
+
 TEST(Engine, BatchOfDifferentShapesIsRefused) {
   const collective::Agent a = make_agent(40), b = make_agent(41);
   std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat"),
