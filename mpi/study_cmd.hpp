@@ -28,17 +28,31 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace divcoll::mpi {
 
 struct StudyArgs {
-  std::string study;  // study file (TOML)
+  std::string study;  // study file (TOML); with --status the study folder
   std::string out;    // study folder
   bool resume = false;
-  bool plan = false;  // validate and print the runs (what each computes and reuses), run nothing
+  bool plan = false;    // validate and print the runs (what each computes and reuses), run nothing
+  std::string run;      // --run K: compute only this run (its number in the plan, or its path)
+  bool status = false;  // --status: list the runs of the folder `study` and what each is doing
+  std::string adopt;    // --adopt RUN.h5: take a run file made elsewhere into the folder
+  std::string variant;  // --variant NAME: the variant --adopt's file stands for (default: its folder's name)
+  std::string submit;   // --submit slurm|pbs: one job per run to compute, then the report (jobs/study-submit.sh)
+  int ranks_per_run = 1;
+  int max_parallel = 0;  // at most this many run jobs at once (0: no limit)
+  bool dry_run = false;  // --submit: print the jobs and their dependencies, submit nothing
+  std::vector<std::string> scheduler_args;  // after `--`: passed to every sbatch / qsub
 };
 
-// initialises MPI, runs the study, finalises; returns the exit code (2 bad input, 1 failure)
+// --run's exit status when the run's base (the run whose stages it copies) has not ended yet
+inline constexpr int kBaseNotComplete = 3;
+
+// initialises MPI, runs the study, finalises; returns the exit code (2 bad input, 1 failure, 75 stopped by a
+// signal after a checkpoint, kBaseNotComplete); --status, --adopt and --submit run without MPI
 int study_main(int argc, char** argv, const StudyArgs& args);
 
 }  // namespace divcoll::mpi
