@@ -285,6 +285,12 @@ void write_manifest(const std::string& dir, const toml::table& t) {
   fs::rename(tmp, p);
 }
 
+// robustness.py's summary of a run file: DIR/<variant>/seed<k>.h5 -> DIR/<variant>/seed<k>.summary.json
+std::filesystem::path summary_path(const std::filesystem::path& run) {
+  std::filesystem::path p = run;
+  return p.replace_extension(".summary.json");
+}
+
 // a run of an existing manifest: its overrides and state, by path
 struct OldRun {
   std::vector<std::string> overrides;
@@ -376,17 +382,15 @@ void save_manifest(const std::string& dir, const Study& s, const std::vector<Pla
     for (auto& [path, o] : manifest_runs(read_manifest(man)))
       for (size_t i = 0; i < runs.size(); ++i)
         if (runs[i].path == path) {
-          if (o.st.status == "complete" && st[i].status != "complete") st[i] = o.st;
+          // another job's run that ended meanwhile (a run marked complete whose file and summary are gone is not)
+          const fs::path f = fs::path(dir) / path;
+          if (o.st.status == "complete" && st[i].status != "complete" &&
+              (fs::exists(f) || fs::exists(summary_path(f))))
+            st[i] = o.st;
           if (st[i].adopted_from.empty()) st[i].adopted_from = o.st.adopted_from, st[i].commit = o.st.commit;
         }
   }
   write_manifest(dir, manifest(s, runs, st));
-}
-
-// robustness.py's summary of a run file: DIR/<variant>/seed<k>.h5 -> DIR/<variant>/seed<k>.summary.json
-std::filesystem::path summary_path(const std::filesystem::path& run) {
-  std::filesystem::path p = run;
-  return p.replace_extension(".summary.json");
 }
 
 std::string clock_text(double s) {

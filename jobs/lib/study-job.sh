@@ -15,9 +15,10 @@ study_field() {
 
 # appends key=value lines to the job file of run path $1 (relative to DIVCOLL_STUDY_DIR)
 study_record() {
-  local path=$1
+  local f=$DIVCOLL_STUDY_DIR/${1%.h5}.job
   shift
-  printf '%s\n' "$@" >> "$DIVCOLL_STUDY_DIR/${path%.h5}.job"
+  mkdir -p "$(dirname "$f")"
+  printf '%s\n' "$@" >> "$f"
 }
 
 # the last value of key $2 in the job file of run path $1
@@ -37,7 +38,7 @@ study_run_task() {
   # shellcheck disable=SC2034  # read by the job scripts
   STUDY_RUN_PATH=$path
   mkdir -p "$DIVCOLL_STUDY_DIR/$(dirname "$path")"
-  study_record "$path" "job=$job" "log=$log" "state=running" "started=$(date +%s)"
+  study_record "$path" "job=$job" "log=$log" "state=running" "started=$(date +%s.%N)"
   divcoll_log "study run $k: $path (job $job)"
   divcoll_launch_resumable "$DIVCOLL_STUDY_DIR/$path" study "$DIVCOLL_STUDY" --out "$DIVCOLL_STUDY_DIR" --resume \
     --run "$k" || rc=$?
@@ -49,7 +50,7 @@ study_run_task() {
   elif [ "$rc" = 3 ]; then
     state=waiting
   fi
-  study_record "$path" "state=$state" "rc=$rc" "ended=$(date +%s)"
+  study_record "$path" "state=$state" "rc=$rc" "ended=$(date +%s.%N)"
   return "$rc"
 }
 

@@ -4,7 +4,9 @@
 # temporary folder and two free ports, so that another Slurm on this machine (or another test) is left
 # alone (TOOLCHAIN.md §4). The caller sets `deadline` (in SECONDS) and defines fail() and skip().
 #   slurm_cluster_need          skips (77) when not root or a Slurm/munge command is missing
-#   slurm_cluster_up W          starts the daemons in folder W (exports SLURM_CONF); skips if they will not start
+#   slurm_cluster_up W          starts the daemons in folder W (exports SLURM_CONF); skips if they will not start.
+#                               SLURM_CLUSTER_AUTHINFO: more AuthInfo options (cred_expire=10: a requeued job
+#                               starts again after 10 s, not 120)
 #   slurm_cluster_down          cancels what is left in the queue, stops exactly the daemons started here
 #                               and removes W (call it from an EXIT trap)
 #   slurm_wait_gone JOB SECS    waits until JOB has left the queue, fails after SECS (or at the deadline)
@@ -103,7 +105,7 @@ SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
 CredType=cred/munge
-AuthInfo=socket=$sock
+AuthInfo=socket=$sock${SLURM_CLUSTER_AUTHINFO:+,$SLURM_CLUSTER_AUTHINFO}
 MailProg=/bin/true
 StateSaveLocation=$W/state
 SlurmdSpoolDir=$W/spool
@@ -122,7 +124,6 @@ AccountingStorageType=accounting_storage/none
 JobCompType=jobcomp/none
 ReturnToService=2
 SchedulerType=sched/backfill
-${SLURM_CLUSTER_EXTRA_CONF:-}
 $node NodeAddr=127.0.0.1 State=UNKNOWN
 PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOC
