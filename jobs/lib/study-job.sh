@@ -40,8 +40,9 @@ study_run_task() {
   mkdir -p "$DIVCOLL_STUDY_DIR/$(dirname "$path")"
   study_record "$path" "job=$job" "log=$log" "state=running" "started=$(date +%s.%N)"
   divcoll_log "study run $k: $path (job $job)"
+  # by its path, not its number: a study file that gained variants since the submission numbers its runs anew
   divcoll_launch_resumable "$DIVCOLL_STUDY_DIR/$path" study "$DIVCOLL_STUDY" --out "$DIVCOLL_STUDY_DIR" --resume \
-    --run "$k" || rc=$?
+    --run "$path" || rc=$?
   local state=failed
   if [ "$rc" = 0 ]; then
     state=complete
@@ -56,12 +57,13 @@ study_run_task() {
 
 # the report job: every run's state, then the summaries and the robustness page (divcoll report DIR)
 study_report_task() {
-  local rc=0
+  local rc=0 status
   divcoll_log "study $DIVCOLL_STUDY_DIR: every run job has ended"
-  "$DIVCOLL_BIN" study "$DIVCOLL_STUDY_DIR" --status || rc=$?
-  if [ "$rc" != 0 ]; then
-    divcoll_log "some runs failed (above): no report; fix them and submit the study again (the same command)"
-    return "$rc"
+  status=$("$DIVCOLL_BIN" study "$DIVCOLL_STUDY_DIR" --status 2>&1) || rc=$?
+  echo "$status"
+  if [ "$rc" != 0 ] || ! grep -q "the study is complete" <<< "$status"; then
+    divcoll_log "not every run is complete (above): no report; fix what failed and submit the study again (the same command)"
+    return 1
   fi
   "$DIVCOLL_BIN" report "$DIVCOLL_STUDY_DIR" || rc=$?
   divcoll_log "divcoll report $DIVCOLL_STUDY_DIR ended with status $rc"
