@@ -8,7 +8,7 @@
 #                               SLURM_CLUSTER_AUTHINFO: more AuthInfo options (cred_expire=10: a requeued job
 #                               starts again after 10 s, not 120)
 #   slurm_cluster_down          cancels what is left in the queue, stops exactly the daemons started here
-#                               and removes W (call it from an EXIT trap)
+#                               and removes W (call it from an EXIT trap; SLURM_TEST_KEEP=1 keeps W)
 #   slurm_wait_gone JOB SECS    waits until JOB has left the queue, fails after SECS (or at the deadline)
 #   by SECS                     an end time SECS from now, or the deadline if that comes first
 
@@ -67,7 +67,7 @@ slurm_cluster_down() {
   _slurm_stop_daemon "$W/slurmd.pid" slurmd
   _slurm_stop_daemon "$W/slurmctld.pid" slurmctld
   _slurm_stop_daemon "$W/munge/munged.pid" munged
-  rm -rf "$W"
+  if [ "${SLURM_TEST_KEEP:-0}" = 1 ]; then echo "kept $W (SLURM_TEST_KEEP=1)"; else rm -rf "$W"; fi
   _slurm_w=
 }
 

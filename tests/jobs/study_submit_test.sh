@@ -22,7 +22,7 @@ skip() {
 fail() {
   echo "study submit test FAILED: $*"
   for f in "$W"/s/jobs/*.out "$W"/*.log "$W/log/slurmctld.log"; do
-    [ -f "$f" ] && { echo "---- $f (last 30 lines)"; tail -30 "$f"; }
+    [ -f "$f" ] && { echo "---- $f (last 60 lines)"; tail -60 "$f"; }
   done
   exit 1
 }
@@ -101,8 +101,9 @@ done
 log1=$(ls "$W"/s/jobs/divcoll-*-"${A}_1.out")
 grep -q "stopping the run after its next checkpoint" "$log1" || fail "task 1 did not act on the warning"
 grep -q "checkpoint written: the run stopped right after it" "$log1" || fail "task 1 did not stop at a checkpoint"
-grep -q "requeued job ${A}_1 (requeue 1 of at most 1)" "$log1" || fail "task 1 did not requeue itself"
-grep -q "requeue 1 of at most 1" "$log1" || fail "task 1 was not started again"
+grep -q "requeueing job ${A}_1 (requeue 1 of at most 1)" "$log1" || fail "task 1 did not requeue itself"
+grep -q "Requeuing JobId=${A}_1" "$W/log/slurmctld.log" || fail "Slurm did not requeue task 1"
+grep -q "job ${A}_1 (.*) on .*, requeue 1 of at most 1" "$log1" || fail "task 1 was not started again"
 grep -q "resuming" "$log1" || fail "task 1's continuation did not resume the run"
 grep -q "run complete: baseline/seed1.h5" "$log1" || fail "task 1's continuation did not complete the run"
 # dependencies: each derived run started after its base's last end; never more than 2 tasks at once
