@@ -765,6 +765,10 @@ int submit_main(const StudyArgs& args) {
   DIVCOLL_THROW_UNLESS(args.submit == "slurm" || args.submit == "pbs", "--submit takes slurm or pbs, not " << args.submit);
   DIVCOLL_THROW_UNLESS(args.ranks_per_run >= 1, "--ranks-per-run must be at least 1");
   DIVCOLL_THROW_UNLESS(args.max_parallel >= 0, "--max-parallel must be at least 1 (0: no limit)");
+  const char* env_root = std::getenv("DIVCOLL_ROOT");
+  const std::string root = env_root && *env_root ? env_root : DIVCOLL_SOURCE_DIR;
+  const std::string script = (fs::path(root) / "jobs" / "study-submit.sh").string();
+  DIVCOLL_THROW_UNLESS(fs::is_regular_file(script), "no " << script << " (set DIVCOLL_ROOT to the repository)");
   Prepared p = prepare(args, true, true);
   const std::string dir = fs::absolute(args.out).lexically_normal().string();
   if (!args.dry_run) create_folder(dir, p.s);
@@ -807,10 +811,6 @@ int submit_main(const StudyArgs& args) {
     }
     DIVCOLL_THROW_UNLESS(out.good(), "cannot write " << list);
   }
-  const char* env_root = std::getenv("DIVCOLL_ROOT");
-  const std::string root = env_root && *env_root ? env_root : DIVCOLL_SOURCE_DIR;
-  const std::string script = (fs::path(root) / "jobs" / "study-submit.sh").string();
-  DIVCOLL_THROW_UNLESS(fs::is_regular_file(script), "no " << script << " (set DIVCOLL_ROOT to the repository)");
   std::string self = fs::read_symlink("/proc/self/exe").string();
   std::vector<std::string> a = {"bash", script, args.submit, "--study", fs::absolute(args.study).lexically_normal().string(),
                                 "--out", dir, "--runs", list, "--of", std::to_string(N), "--name", p.s.name,
