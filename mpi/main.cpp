@@ -168,10 +168,25 @@ int main(int argc, char** argv) {
 
   mpi::StudyArgs study;
   auto* st = app.add_subcommand("study", "one run file per (variant, seed) of a study file, reusing shared stages (MPI)");
-  st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml")->required()->check(CLI::ExistingFile);
-  st->add_option("--out", study.out, "study folder (manifest study.toml, <variant>/seed<k>.h5)")->required();
-  st->add_flag("--resume", study.resume, "continue a study that was interrupted");
+  st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml; with --status the study folder")
+      ->required()->check(CLI::ExistingPath);
+  st->add_option("--out", study.out, "study folder (manifest study.toml, <variant>/seed<k>.h5)");
+  st->add_flag("--resume", study.resume, "continue a study that was interrupted, or grown by new seeds or variants");
   st->add_flag("--plan", study.plan, "validate the study file and print its runs (what each computes and reuses); run nothing");
+  st->add_option("--run", study.run, "with --resume: compute only this run (its number in --plan, or its path), "
+                                     "exit 3 if the run it reuses has not ended");
+  st->add_flag("--status", study.status, "list every run of the study folder: done, running, waiting, failed; ETA");
+  st->add_option("--adopt", study.adopt, "copy a complete run file made elsewhere into the study folder, if its "
+                                         "config is the study's run of its (variant, seed)")->check(CLI::ExistingFile);
+  st->add_option("--variant", study.variant, "with --adopt: the variant the file stands for (default: its folder's name, "
+                                             "else the variant whose config it has)");
+  st->add_option("--submit", study.submit, "submit one job per run still to compute (with its own ranks and "
+                                           "resubmission), then the report job: slurm or pbs")
+      ->check(CLI::IsMember({"slurm", "pbs"}));
+  st->add_option("--ranks-per-run", study.ranks_per_run, "with --submit: MPI ranks of each run's job (default 1)");
+  st->add_option("--max-parallel", study.max_parallel, "with --submit: at most this many run jobs at once (default: no limit)");
+  st->add_flag("--dry-run", study.dry_run, "with --submit: print the jobs and their dependencies, submit nothing");
+  st->add_option("scheduler_options", study.scheduler_args, "with --submit, after --: options for every sbatch / qsub");
 
   // a mistyped command is named, with the list of commands
   std::string known;

@@ -1,6 +1,6 @@
 # shellcheck shell=bash
-# What the job scripts share (sourced by jobs/slurm/divcoll.sbatch, jobs/pbs/divcoll.pbs and
-# jobs/run-workstation.sh): load a machine profile, resolve the run's paths, and run
+# What the job scripts share (sourced by jobs/slurm/divcoll.sbatch, jobs/pbs/divcoll.pbs, the study's
+# jobs/slurm/study-run.sbatch and jobs/pbs/study-run.pbs, and jobs/run-workstation.sh): load a machine profile, resolve the run's paths, and run
 # `divcoll run CONFIG --out OUT --resume` so that it can be stopped and continued without losing work.
 #
 # Stopping. A killed run continues from its last checkpoint (OUT.ckpt, replaced at a commit every
@@ -116,17 +116,25 @@ _divcoll_on_term() {
 # and returns its exit status. Sets DIVCOLL_STOPPED=1 if it was stopped for a continuation (SIGUSR1 while
 # DIVCOLL_CAN_CONTINUE=1), 0 otherwise.
 divcoll_run_resumable() {
-  local config=$1 out=$2 rc=0
+  local config=$1 out=$2
   shift 2
+  divcoll_launch_resumable "$out" run "$config" --out "$out" --resume "$@"
+}
+
+# divcoll_launch_resumable OUT ARGS...: the same for any divcoll command that writes the run file OUT
+# (`study STUDY --out DIR --resume --run K` writes DIR/<variant>/seed<k>.h5): $DIVCOLL_LAUNCH $DIVCOLL_BIN ARGS
+divcoll_launch_resumable() {
+  local out=$1 rc=0
+  shift
   local -a launch
   read -ra launch <<< "${DIVCOLL_LAUNCH:-}"
   _divcoll_out=$out
   _divcoll_stopper=
   # shellcheck disable=SC2034  # read by the job scripts
   DIVCOLL_STOPPED=0
-  divcoll_log "${launch[*]} $DIVCOLL_BIN run $config --out $out --resume $*"
+  divcoll_log "${launch[*]} $DIVCOLL_BIN $*"
   _divcoll_started=$(date +%s)
-  "${launch[@]}" "$DIVCOLL_BIN" run "$config" --out "$out" --resume "$@" &
+  "${launch[@]}" "$DIVCOLL_BIN" "$@" &
   _divcoll_pid=$!
   trap _divcoll_on_usr1 USR1
   trap _divcoll_on_term TERM INT

@@ -7,7 +7,10 @@
 #     stand-in qsub that records what it is given; the job must stop after a checkpoint and resubmit itself
 #     (qsub -V -W depend=afterany:<job>); the resubmitted job, run here with the variables qsub -V passes,
 #     ignores its own warning (no resubmissions left) and completes the run, which must equal a plain
-#     mpirun run of the same config.
+#     mpirun run of the same config;
+#  4. `divcoll study --submit pbs` with a stand-in qsub (one array per level of reuse, the report job after
+#     them), one subjob run as PBS runs it (a complete run file), and a subjob whose base has not ended
+#     (it submits itself again after the base's job).
 # Usage: pbs_check.sh DIVCOLL SOURCE_DIR. Exit 77 (skipped) if shellcheck is missing (the rest still runs).
 set -euo pipefail
 D=$1 SRC=$2
@@ -136,6 +139,59 @@ grep -q "no continuation can follow (resubmission 1 of at most 1)" "$W/pbs-2.log
 complete_run_file "$W/run.h5"
 "$D" compare "$W/ref.h5" "$W/run.h5" || fail "the stopped and resubmitted run differs from the plain mpirun run"
 echo "job 1002 resumed and completed the run: identical to the plain run"
+
+echo "== a study submitted to PBS (stand-in qsub), one subjob run as PBS runs it"
+mkdir "$W/sbin"
+cat > "$W/sbin/qsub" << EOF
+#!/usr/bin/env bash
+# stand-in qsub: one line of arguments per call, job ids 3000.fake, 3001.fake, ... (arrays: 3000[].fake)
+n=\$(wc -l < "$W/study-qsub.log" 2> /dev/null || echo 0)
+printf '%s\n' "\$*" >> "$W/study-qsub.log"
+case " \$* " in *" -J "*) echo "\$((3000 + n))[].fake" ;; *) echo "\$((3000 + n)).fake" ;; esac
+EOF
+chmod +x "$W/sbin/qsub"
+S=$W/pbs-study
+PATH="$W/sbin:$PATH" "$D" study "$SRC/configs/studies/tiny.toml" --out "$S" --submit pbs --ranks-per-run 2 \
+  --max-parallel 2 --dry-run > "$W/pbs-dry.log" 2>&1 || fail "the PBS dry run failed"
+{ [ ! -e "$S" ] && [ ! -e "$W/study-qsub.log" ]; } || fail "the PBS dry run wrote or submitted something"
+PATH="$W/sbin:$PATH" "$D" study "$SRC/configs/studies/tiny.toml" --out "$S" --submit pbs --ranks-per-run 2 \
+  --max-parallel 2 -- -A myproject > "$W/pbs-submit.log" 2>&1 || fail "the PBS submission failed"
+cat "$W/pbs-submit.log"
+mapfile -t calls < "$W/study-qsub.log"
+[ "${#calls[@]}" = 3 ] || fail "not 3 qsub calls (level 0, level 1, report): ${calls[*]}"
+[[ ${calls[0]} == *"select=1:ncpus=2:mpiprocs=2"*"-J 1-2%2 "*"DIVCOLL_STUDY_LEVEL_FILE=$S/jobs/level-0.runs"*"-A myproject"* ]] ||
+  fail "level 0: qsub ${calls[0]}"
+[[ ${calls[1]} == *"-J 1-2%2 "*"depend=afterok:3000[].fake"* ]] || fail "level 1: qsub ${calls[1]}"
+[[ ${calls[2]} == *"DIVCOLL_STUDY_REPORT=1"*"depend=afterany:3000[].fake:3001[].fake"* ]] || fail "report: qsub ${calls[2]}"
+{ [ "$(cat "$S/jobs/level-0.runs")" = "$(printf '1\n3')" ] && [ "$(cat "$S/jobs/level-1.runs")" = "$(printf '2\n4')" ]; } ||
+  fail "level files: $(cat "$S"/jobs/level-*.runs)"
+# the job's environment as qsub -v gives it (the level-0 array's variables)
+IFS=, read -ra vars <<< "$(sed -n 's/.* -v \([^ ]*\) .*/\1/p' <<< "${calls[0]}")"
+study_job() {  # study_job LOG VAR=VALUE...: jobs/pbs/study-run.pbs as PBS runs it
+  local log=$1 rc=0
+  shift
+  (cd / && env -u SLURM_JOB_ID PATH="$W/sbin:$PATH" PBS_NODEFILE="$W/nodefile" PBS_O_WORKDIR="$W" \
+    PBS_JOBNAME=divcoll-tiny DIVCOLL_PROFILE=generic-cluster "${vars[@]}" "$@" \
+    timeout 120 bash "$SRC/jobs/pbs/study-run.pbs") > "$W/$log" 2>&1 || rc=$?
+  return "$rc"
+}
+# subjob 1 of level 0: run 1 (baseline seed 1) on the 2 ranks of the node file
+study_job pbs-study-1.log PBS_JOBID='3000[1].fake' PBS_ARRAY_INDEX=1 || fail "subjob 3000[1] failed"
+grep -q "launcher: mpirun -np 2 --hostfile $W/nodefile" "$W/pbs-study-1.log" || fail "subjob 1 not launched from PBS_NODEFILE"
+grep -q "run complete: baseline/seed1.h5" "$W/pbs-study-1.log" || fail "subjob 1 did not complete run 1"
+for g in agents connectors deploy analysis; do
+  h5dump -a "/$g/status" "$S/baseline/seed1.h5" | grep -q '"complete"' || fail "run 1: stage $g is not complete"
+done
+grep -q "state=complete" "$S/baseline/seed1.job" || fail "subjob 1 did not record its run complete"
+# subjob 2 of level 1 (run 4) before its base (run 3) has ended: it goes again after the base's job
+study_job pbs-study-4.log PBS_JOBID='3001[2].fake' PBS_ARRAY_INDEX=2 DIVCOLL_STUDY_LEVEL_FILE="$S/jobs/level-1.runs" ||
+  fail "subjob 3001[2] failed"
+grep -qF "baseline/seed2.h5 has not ended: this run goes again after job 3000[].fake" "$W/pbs-study-4.log" ||
+  fail "run 4 before its base: $(tail -5 "$W/pbs-study-4.log")"
+[[ $(tail -1 "$W/study-qsub.log") == "-V -W depend=afterok:3000[].fake -N divcoll-tiny "*"/jobs/pbs/study-run.pbs" ]] ||
+  fail "run 4's resubmission: qsub $(tail -1 "$W/study-qsub.log")"
+[ ! -e "$S/long_deploy/seed2.h5" ] || fail "run 4 started without its base"
+echo "PBS study: levels and dependencies submitted; subjob 1 computed run 1; run 4 waits for its base's job"
 
 if [ "$have_shellcheck" = 0 ]; then
   echo "pbs checks SKIPPED in part: shellcheck is missing"

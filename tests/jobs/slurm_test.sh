@@ -7,71 +7,16 @@
 # Usage: slurm_test.sh DIVCOLL SOURCE_DIR. Exit 77 (skipped) when Slurm is not installed or will not start.
 set -euo pipefail
 D=$1 SRC=$2
-export PATH=$PATH:/usr/sbin:/sbin
 OVR=(agents.population=10 agents.generations=12 agents.epochs=5 agents.episode_steps=1000)
 t_start=$SECONDS
 # every wait ends by this deadline, well inside ctest's TIMEOUT (660 s, which would kill the test without its
 # cleanup). The waits are bounds for a hung job, not timings: generous, so that a loaded machine passes
 deadline=$((SECONDS + ${SLURM_TEST_BUDGET_S:-600}))
-# an end time $1 seconds from now, or the deadline if that comes first
-by() { echo $((SECONDS + $1 < deadline ? SECONDS + $1 : deadline)); }
 
 skip() {
   echo "slurm test SKIPPED: $*"
   exit 77
 }
-[ "$(id -u)" = 0 ] || skip "not root (the test starts munged, slurmctld and slurmd as root)"
-for c in munged munge unmunge slurmctld slurmd sbatch squeue scancel sinfo scontrol mpirun h5dump; do
-  command -v "$c" > /dev/null 2>&1 ||
-    skip "$c is missing; install Slurm with jobs/install-deps.sh (slurmctld slurmd slurm-client munge)"
-done
-
-W=$(mktemp -d)
-chmod 711 "$W"  # munged wants its socket's folders searchable by all
-export SLURM_CONF=$W/slurm.conf
-
-# is process $1 running (not gone, not a zombie waiting for PID 1 to reap it)?
-running() {
-  local st
-  st=$(ps -o stat= -p "$1" 2> /dev/null) || return 1
-  [[ $st != Z* ]]
-}
-# stop exactly the daemons started here, by the PIDs in their pid files (checking the process's name)
-stop_daemon() {
-  local pidfile=$1 name=$2 pid
-  [ -s "$pidfile" ] || return 0
-  pid=$(cat "$pidfile")
-  [ "$(cat "/proc/$pid/comm" 2> /dev/null)" = "$name" ] || return 0
-  kill "$pid" 2> /dev/null || return 0
-  for _ in $(seq 50); do
-    running "$pid" || return 0
-    sleep 0.1
-  done
-  kill -9 "$pid" 2> /dev/null || true
-}
-cleanup() {
-  set +e
-  # cancel what is left of the jobs (a failed test), so that no slurmstepd outlives slurmd
-  if [ -s "$W/slurmctld.pid" ] && running "$(cat "$W/slurmctld.pid")"; then
-    local jobs
-    jobs=$(squeue -h -o %i 2> /dev/null)
-    if [ -n "$jobs" ]; then
-      # shellcheck disable=SC2086
-      scancel $jobs
-      for _ in $(seq 100); do
-        [ -z "$(squeue -h -o %i 2> /dev/null)" ] && break
-        sleep 0.2
-      done
-    fi
-  fi
-  stop_daemon "$W/slurmd.pid" slurmd
-  stop_daemon "$W/slurmctld.pid" slurmctld
-  stop_daemon "$W/munge/munged.pid" munged
-  rm -rf "$W"
-}
-trap cleanup EXIT
-trap 'exit 1' TERM INT HUP
-
 fail() {
   echo "slurm test FAILED: $*"
   for f in "$W"/*.out "$W/log/slurmctld.log" "$W/log/slurmd.log"; do
@@ -79,64 +24,13 @@ fail() {
   done
   exit 1
 }
-
-echo "== munged (private socket and key)"
-mkdir -m 711 "$W/munge"
-mkdir -m 755 "$W/state" "$W/spool" "$W/log"
-mungekey -c -k "$W/munge/munge.key" 2> /dev/null ||
-  { dd if=/dev/urandom of="$W/munge/munge.key" bs=1 count=1024 status=none && chmod 600 "$W/munge/munge.key"; }
-sock=$W/munge/munge.socket
-munged --socket="$sock" --key-file="$W/munge/munge.key" --pid-file="$W/munge/munged.pid" \
-  --log-file="$W/munge/munged.log" --seed-file="$W/munge/munged.seed" ||
-  skip "munged would not start: $(tail -2 "$W/munge/munged.log" 2> /dev/null)"
-munge -n -S "$sock" | unmunge -S "$sock" > /dev/null || skip "munge credentials do not round-trip"
-
-echo "== slurmctld, slurmd (config in $W)"
-host=$(hostname -s)
-# two free ports, so that a Slurm already on this machine is left alone
-for _ in $(seq 20); do
-  port=$((20000 + RANDOM % 20000))
-  if ! ss -Hltn 2> /dev/null | grep -qE ":($port|$((port + 1)))\b"; then break; fi
-done
-node=$(slurmd -C | head -1)  # NodeName=<host> CPUs=... RealMemory=...
-cat > "$SLURM_CONF" << EOF
-ClusterName=divcolltest
-SlurmctldHost=$host(127.0.0.1)
-SlurmctldPort=$port
-SlurmdPort=$((port + 1))
-SlurmUser=root
-SlurmdUser=root
-AuthType=auth/munge
-CredType=cred/munge
-AuthInfo=socket=$sock
-MailProg=/bin/true
-StateSaveLocation=$W/state
-SlurmdSpoolDir=$W/spool
-SlurmctldPidFile=$W/slurmctld.pid
-SlurmdPidFile=$W/slurmd.pid
-SlurmctldLogFile=$W/log/slurmctld.log
-SlurmdLogFile=$W/log/slurmd.log
-ProctrackType=proctrack/linuxproc
-TaskPlugin=task/none
-SwitchType=switch/none
-SelectType=select/cons_tres
-SelectTypeParameters=CR_Core
-MpiDefault=pmix
-JobAcctGatherType=jobacct_gather/none
-AccountingStorageType=accounting_storage/none
-JobCompType=jobcomp/none
-ReturnToService=2
-SchedulerType=sched/backfill
-$node NodeAddr=127.0.0.1 State=UNKNOWN
-PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
-EOF
-slurmctld -f "$SLURM_CONF" || skip "slurmctld would not start: $(tail -3 "$W/log/slurmctld.log" 2> /dev/null)"
-slurmd -f "$SLURM_CONF" || skip "slurmd would not start: $(tail -3 "$W/log/slurmd.log" 2> /dev/null)"
-end=$(by 30)
-while [ "$SECONDS" -lt "$end" ] && [ "$(sinfo -h -o %t 2> /dev/null)" != idle ]; do sleep 0.2; done
-[ "$(sinfo -h -o %t 2> /dev/null)" = idle ] ||
-  skip "the node did not become idle in 30 s: $(sinfo -h 2>&1 | head -2) $(tail -3 "$W/log/slurmd.log")"
-echo "cluster up in $((SECONDS - t_start)) s: $(sinfo -h -o '%P %D %c %t')"
+# shellcheck source=tests/jobs/slurm-cluster.sh
+source "$SRC/tests/jobs/slurm-cluster.sh"
+slurm_cluster_need
+W=$(mktemp -d)
+trap slurm_cluster_down EXIT
+trap 'exit 1' TERM INT HUP
+slurm_cluster_up "$W"
 
 echo "== reference: plain mpirun, 2 ranks"
 (
@@ -156,15 +50,6 @@ j1=$(sbatch --parsable "${opts[@]}" "$script" "$SRC/configs/tiny.toml" "$W/run.h
 j1=${j1%%;*}
 echo "job $j1 submitted"
 
-# waits until job $1 has left the queue (or fails after $2 seconds)
-wait_gone() {
-  local end
-  end=$(by "$2")
-  while [ -n "$(squeue -h -j "$1" -o %i 2> /dev/null)" ]; do
-    [ "$SECONDS" -lt "$end" ] || fail "job $1 still queued or running at $((SECONDS - t_start)) s of the test"
-    sleep 0.2
-  done
-}
 # the time-limit warning as Slurm sends it with --signal=B:USR1@120: SIGUSR1 to the batch shell only
 warn() { scancel --batch --signal=USR1 "$1"; }
 
@@ -177,7 +62,7 @@ until [ -f "$W/run.h5.ckpt" ]; do
 done
 warn "$j1"
 echo "job $j1: time-limit warning sent after the first checkpoint"
-wait_gone "$j1" 240
+slurm_wait_gone "$j1" 240
 j2=$(sed -n 's/.*resubmitted as job \([0-9]*\).*/\1/p' "$W/divcoll-test-$j1.out")
 [ -n "$j2" ] || fail "job $j1 did not resubmit itself"
 echo "job $j1 stopped and resubmitted itself as job $j2"
@@ -189,7 +74,7 @@ until grep -q -- "--resume" "$W/divcoll-test-$j2.out" 2> /dev/null; do
   sleep 0.2
 done
 warn "$j2"  # held until the run has started if it comes earlier (the job script traps it from its first line)
-wait_gone "$j2" 360
+slurm_wait_gone "$j2" 360
 [ -z "$(squeue -h -o %i)" ] || fail "jobs left in the queue: $(squeue -h)"
 
 echo "== checks"
