@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   c->add_option("--seed", sc.seed, "random seed for agents and connector");
   c->add_option("--connector", sc.connector, "weak or strong")->check(CLI::IsMember({"weak", "strong"}));
   c->add_flag("--uniform", sc.uniform, "clones of one agent instead of different agents");
-  c->add_option("--config", sc.config, "run config whose connector stiffness to use (default: the paper's)")
+  c->add_option("--config", sc.config, "run config whose connector stiffness and contact law (run.contact) to use (default: the paper's)")
       ->check(CLI::ExistingFile);
   c->add_flag("--force", sc.force, "overwrite an existing output file");
 

@@ -57,7 +57,8 @@ struct MpiSession {
 
 }  // namespace
 
-// the sections whose keys decide what a stage computes (beside run.seed and run.precision, which every stage uses)
+// the sections whose keys decide what a stage computes (beside run.seed, run.precision and run.contact, which every
+// stage uses)
 std::vector<std::string> sections_before(const std::string& stage) {
   std::vector<std::string> out;
   for (const std::string& s : io::stage_names()) {
@@ -67,8 +68,8 @@ std::vector<std::string> sections_before(const std::string& stage) {
   return out;
 }
 
-// --from: the keys of the stages before `from` (and run.seed, run.precision; analysis.familiarity_on, which the
-// deploy stage reads, when deploy is before `from`) must be the base's; returns the
+// --from: the keys of the stages before `from` (and run.seed, run.precision, run.contact; analysis.familiarity_on,
+// which the deploy stage reads, when deploy is before `from`) must be the base's; returns the
 // differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
 std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
   const auto a = io::flat(base), b = io::flat(now);
@@ -79,7 +80,8 @@ std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& no
     // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
     const bool deploy_reads = a[i].first == "analysis.familiarity_on" &&
                               std::find(secs.begin(), secs.end(), "deploy") != secs.end();
-    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || deploy_reads ||
+    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || a[i].first == "run.contact" ||
+                       deploy_reads ||
                        std::find(secs.begin(), secs.end(), sec) != secs.end();
     if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
   }
@@ -279,6 +281,7 @@ int run_session(const RunArgs& args) {
     });
     // every episode of this run in the run's precision (a study runs several configs in one process)
     sim::set_default_float_networks(cfg.run.precision == "float_networks");
+    io::use_run_physics(cfg);  // and under its contact law
     const fs::path parent = fs::absolute(path).parent_path();
     agree_rank0(MPI_COMM_WORLD, [&] {
       std::error_code mkdir_error;

@@ -81,7 +81,8 @@ class Clip:
         self.ep = animate.Episode(scene, traj)
         self.title = title
         with h5py.File(scene, "r") as s:
-            self.env_attrs = {k: float(v) for k, v in s["env"].attrs.items() if k != "name"}
+            # the numeric constants (name and contact are strings)
+            self.env_attrs = {k: float(v) for k, v in s["env"].attrs.items() if not isinstance(v, (str, bytes))}
         self.bl = self.ep.bl
         self.stored_bl = stored_bl
         with h5py.File(traj, "r") as t:

@@ -26,7 +26,8 @@ int simulate(const SimulateArgs& a);
 //               [--uniform] [--config RUN.toml] [--force]
 struct SceneArgs {
   std::string kind = "pair", env = "flat", out, connector = "weak";
-  std::string config;  // the connector stiffness comes from this config's [connectors] (default: the paper's)
+  std::string config;  // the connector stiffness comes from this config's [connectors], the contact law from its
+                       // run.contact (default: the paper's)
   int agents = 2;
   uint64_t seed = 1;
   bool uniform = false;

@@ -48,6 +48,7 @@ int export_scene(const ExportArgs& a) {
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
                        a.run << " is not a divcoll run file");
   const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
+  io::use_run_physics(cfg);  // the episode's scene under the run's contact law (written into the scene file)
   std::vector<collective::Agent> agents;
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
   // pairs and chains need the anchors the connectors stage stored (the ones every stage used)

@@ -63,6 +63,7 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("agents/final"), run << " has no final agent population (run the agents stage)");
   RunAgents ra{io::apply_overrides(io::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}};
+  io::use_run_physics(ra.cfg);  // the run's scenes under the run's contact law
   for (const auto& x : io::read_final_population(f)) ra.agents.push_back(x.agent);
   for (auto& ag : ra.agents) ag.anchors = collective::compute_anchors(ag);
   return ra;

@@ -100,8 +100,9 @@ int scene(const SceneArgs& a) {
   io::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const collective::Tether k = collective::strength_tether(a.config.empty() ? io::default_config() : io::load_config(a.config),
-                                         a.connector);
+  const io::RunConfig cfg = a.config.empty() ? io::default_config() : io::load_config(a.config);
+  const collective::Tether k = collective::strength_tether(cfg, a.connector);
+  io::use_run_physics(cfg);  // the config's contact law (run.contact)
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
@@ -254,8 +255,8 @@ int demo(const DemoArgs& a) {
 }
 
 int envs() {
-  std::printf("%-12s %7s %7s %7s %7s %7s %7s %7s %7s  %s\n", "name", "gravity", "damping", "mu", "kappa_t",
-              "belt", "wind", "adhes.", "band", "terrain (dx, y, slope) from x_f");
+  std::printf("%-12s %7s %7s %7s %7s %7s %7s %7s %7s %7s  %s\n", "name", "gravity", "damping", "mu", "kappa_t",
+              "belt", "wind", "adhes.", "band", "kap_ns", "terrain (dx, y, slope) from x_f");
   for (const auto& t : io::builtin_environments()) {
     const auto& e = t.physics;
     std::string ter;
@@ -264,9 +265,9 @@ int envs() {
       std::snprintf(buf, sizeof buf, "(%g, %g, %g) ", s.x_start, s.y_start, s.slope);
       ter += buf;
     }
-    std::printf("%-12s %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g  %s\n", e.name.c_str(), e.gravity, e.damping,
-                e.friction, e.tangent_keep, e.belt_speed, e.wind_amp, e.adhesion, e.adhesion_band,
-                ter.empty() ? "flat" : ter.c_str());
+    std::printf("%-12s %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g  %s\n", e.name.c_str(), e.gravity,
+                e.damping, e.friction, e.tangent_keep, e.belt_speed, e.wind_amp, e.adhesion, e.adhesion_band,
+                e.no_slip_keep, ter.empty() ? "flat" : ter.c_str());
   }
   return 0;
 }

@@ -120,6 +120,13 @@ const std::vector<Key>& schema() {
              "controllers' networks (inputs, weights, activations, their gradients) in float and the physics in "
              "double, about 1.3-1.5x faster per episode (jobs/BENCHMARKS.md, the float path) but not bit-comparable with double",
              DIVCOLL_FIELD(run.precision)),
+        pick("run", "contact", T::Choice, "\"coulomb\"", {"coulomb", "no_slip"},
+             "the contact law of every environment (SPEC §2.4, src/MODEL.md \"Contact laws\"): coulomb is the spec's "
+             "(Coulomb friction mu, retention kappa_t, time of impact); no_slip is DiffTaichi's mass_spring.py "
+             "advance_toi, where a mass that hits the ground takes the ground's velocity (the belt's on a "
+             "treadmill) plus no_slip_keep of its tangential velocity (environments.toml: 0 but ice, 1/3), with "
+             "the same contact detection and time of impact; friction and tangent_keep are then unused",
+             DIVCOLL_FIELD(run.contact)),
         // [agents]
         num("agents", "population", T::Int, "100", "[2, 100000]", "agents", "size of the evolved population",
             DIVCOLL_FIELD(agents.population)),
@@ -1048,6 +1055,13 @@ std::string schema_markdown() {
            k.unit + " | " + k.doc + " |\n";
   }
   return out;
+}
+
+void use_run_physics(const RunConfig& cfg) {
+  sim::ContactLaw law = sim::ContactLaw::coulomb;
+  DIVCOLL_THROW_UNLESS(sim::contact_law_from_name(cfg.run.contact, &law),
+                       "run.contact = \"" << cfg.run.contact << "\" is not a contact law (coulomb, no_slip)");
+  set_contact_law(law);
 }
 
 }  // namespace divcoll::io

@@ -25,6 +25,7 @@ struct RunConfig {
     double stop_grace_s{};      // after SIGTERM/SIGINT/SIGUSR1: longest wait for the next checkpoint
     double memory_limit_gb{};   // per node, for every rank's simulator tape together (0 = 80% of MemAvailable)
     std::string precision;      // double | float_networks (the controllers' networks in float; sim::RunOptions)
+    std::string contact;        // coulomb | no_slip: the contact law of every environment (io::set_contact_law)
     bool operator==(const Run&) const = default;
   };
   struct Agents {
@@ -165,5 +166,10 @@ std::vector<std::pair<std::string, std::string>> flat(const RunConfig& cfg);
 std::vector<std::string> config_keys();
 // a markdown table of every key: key, type, default, allowed, unit, meaning
 std::string schema_markdown();
+
+// makes the config's run-wide physics the process's: run.contact for every environment placed from now on
+// (io::set_contact_law). Call it before building any scene of the run, and before rebuilding one from a run
+// file's stored config.
+void use_run_physics(const RunConfig& cfg);
 
 }  // namespace divcoll::io

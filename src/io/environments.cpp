@@ -1,6 +1,7 @@
 #include "io/environments.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -29,6 +30,7 @@ const Key kKeys[] = {
     {"wind_period", &sim::Environment::wind_period, 0, 1e6, true},
     {"adhesion", &sim::Environment::adhesion, 0, 100, false},
     {"adhesion_band", &sim::Environment::adhesion_band, 0, 1, false},
+    {"no_slip_keep", &sim::Environment::no_slip_keep, 0, 1, false},
 };
 
 double number_of(const toml::node& n, const std::string& where) {
@@ -82,7 +84,13 @@ void read_table(const toml::table& t, const std::string& where, sim::Environment
   }
 }
 
+// the contact law place_environment stamps on every environment (set_contact_law)
+std::atomic<sim::ContactLaw> g_contact_law{sim::ContactLaw::coulomb};
+
 }  // namespace
+
+void set_contact_law(sim::ContactLaw law) { g_contact_law = law; }
+sim::ContactLaw contact_law() { return g_contact_law; }
 
 std::vector<EnvironmentTable> parse_environments(const std::string& text, const std::string& origin) {
   toml::table root;
@@ -148,6 +156,7 @@ const EnvironmentTable& environment_table(const std::string& name) {
 
 sim::Environment place_environment(const EnvironmentTable& table, double max_x0) {
   sim::Environment env = table.physics;
+  env.contact = contact_law();
   const double xf = max_x0 + 0.05;
   env.terrain.clear();
   env.terrain.push_back(sim::Segment{-1e9, 0.0, 0.0});

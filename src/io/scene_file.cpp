@@ -139,6 +139,14 @@ sim::Scene read_scene(const std::string& path) {
                            << "\", not a known environment (known: " << known << ")");
   }
   for (const EnvKey& k : kEnvKeys) s.env.*(k.field) = env.read_double(k.name);
+  // the contact law (run.contact) and no_slip's retention: optional, absent in files written before them,
+  // which are coulomb scenes
+  if (env.has_attribute("contact")) {
+    const std::string law = env.read_string("contact");
+    DIVCOLL_THROW_UNLESS(sim::contact_law_from_name(law, &s.env.contact),
+                         path << ": attribute 'contact' of env is \"" << law << "\", not a contact law (coulomb, no_slip)");
+  }
+  s.env.no_slip_keep = env.has_attribute("no_slip_keep") ? env.read_double("no_slip_keep") : 0.0;
   const size_t K = rows_of(f, "env/terrain", 3, "K");
   const std::vector<double> terrain = f.read<double>("env/terrain", Dims{h(K), 3});
   s.env.terrain.resize(K);
@@ -186,6 +194,8 @@ void write_scene_to(h5::File& f, const sim::Scene& s) {
   const h5::Node env = f.create_group("env");
   env.write_string("name", s.env.name);
   for (const EnvKey& k : kEnvKeys) env.write_double(k.name, s.env.*(k.field));
+  env.write_string("contact", sim::contact_law_name(s.env.contact));
+  env.write_double("no_slip_keep", s.env.no_slip_keep);
   const size_t K = s.env.terrain.size();
   std::vector<double> terrain(3 * K);
   for (size_t k = 0; k < K; ++k) {

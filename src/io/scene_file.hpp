@@ -5,7 +5,9 @@
 // optional on read and 0 when absent); datasets masses/{x0, m}, springs/{i, j, rest_length, stiffness,
 // amplitude, damping}, agents/{mass_index, spring_index, params}, connectors/spring_index (also when
 // C = 0, as C × 5 = 0 × 5), connector_params (only when C > 0); group env with the environment's
-// constants as attributes and dataset env/terrain (K × 3; the first x_start is written as -1e9).
+// constants as attributes (with the string contact, "coulomb" or "no_slip", and the double no_slip_keep, both
+// optional on read: coulomb and 0 when absent) and dataset env/terrain (K × 3; the first x_start is written
+// as -1e9).
 #pragma once
 
 #include <string>

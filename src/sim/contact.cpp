@@ -1,5 +1,6 @@
 // stage: contact with the terrain (SPEC §2.4): walls, floor, belt, Coulomb friction, time of impact;
-// and its adjoint with the branches of the forward pass held fixed
+// and its adjoint with the branches of the forward pass held fixed. Under env.contact = no_slip the
+// velocity after contact is DiffTaichi's no-slip one instead of Coulomb's (src/MODEL.md, "Contact laws")
 #include <cmath>
 
 #include "sim/stages.hpp"
@@ -9,6 +10,7 @@ namespace divcoll::sim {
 void contact_forward(const Model& m, const double* x, const double* vp, double* x_next, double* v_next,
                      uint8_t* tau_next, ContactRecord* rec) {
   const Environment& env = m.scene->env;
+  const bool no_slip = env.contact == ContactLaw::no_slip;
   const double h = m.h;
   for (int i = 0; i < m.N; ++i) {
     const double px = x[2 * i], py = x[2 * i + 1];
@@ -62,14 +64,24 @@ void contact_forward(const Model& m, const double* x, const double* vp, double* 
     }
     // Coulomb friction on the tangential relative velocity, plus the belt
     const double tx = rx - vn * r.n[0], ty = ry - vn * r.n[1];
-    const double tn = std::sqrt(tx * tx + ty * ty);
     double wx = r.b[0], wy = r.b[1];
-    if (tn > 0) {
-      const double f = 1.0 + env.friction * vn / tn;
-      if (f > 0) {
-        r.friction_active = 1;
-        wx += env.tangent_keep * f * tx;
-        wy += env.tangent_keep * f * ty;
+    if (no_slip) {
+      // no-slip (DiffTaichi's advance_toi): the surface's velocity, plus κ_ns of the tangential relative
+      // velocity (κ_ns = 0: no sliding, no bounce)
+      if (env.no_slip_keep != 0) {
+        r.friction_active = tx != 0 || ty != 0;
+        wx += env.no_slip_keep * tx;
+        wy += env.no_slip_keep * ty;
+      }
+    } else {
+      const double tn = std::sqrt(tx * tx + ty * ty);
+      if (tn > 0) {
+        const double f = 1.0 + env.friction * vn / tn;
+        if (f > 0) {
+          r.friction_active = 1;
+          wx += env.tangent_keep * f * tx;
+          wy += env.tangent_keep * f * ty;
+        }
       }
     }
     // time of impact: move with v' until the surface, then with v''
@@ -97,6 +109,7 @@ void contact_forward(const Model& m, const double* x, const double* vp, double* 
 void contact_adjoint(const Model& m, const double* vp, const double* v_next, const ContactRecord* rec,
                      const double* xb_next, const double* vb_next, double* vpb, double* xb) {
   const Environment& env = m.scene->env;
+  const bool no_slip = env.contact == ContactLaw::no_slip;
   const double h = m.h;
   for (int i = 0; i < m.N; ++i) {
     const ContactRecord& r = rec[i];
@@ -126,7 +139,15 @@ void contact_adjoint(const Model& m, const double* vp, const double* v_next, con
       xb[2 * i] += phib * r.dphi[0];
       xb[2 * i + 1] += phib * r.dphi[1];
     }
-    if (r.friction_active) {
+    if (no_slip) {
+      // v'' = κ_ns (v_rel − (v_rel·n) n) + b: ∂v''/∂v' = κ_ns (I − n nᵀ), whatever the branch
+      const double kap = env.no_slip_keep;
+      if (kap != 0) {
+        const double wn = wbx * r.n[0] + wby * r.n[1];
+        gx += kap * (wbx - wn * r.n[0]);
+        gy += kap * (wby - wn * r.n[1]);
+      }
+    } else if (r.friction_active) {
       // v'' = κ (1 + μ v_n/|u|) u + b with u = v_rel − v_n n, v_n = v_rel·n, v_rel = v' − b
       const double rx = vx - r.b[0], ry = vy - r.b[1];
       const double vn = rx * r.n[0] + ry * r.n[1];

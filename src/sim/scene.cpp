@@ -93,6 +93,9 @@ void validate_environment(const Environment& e) {
   check_range(e.wind_period, "env/wind_period", 0, 1e6, true);
   check_range(e.adhesion, "env/adhesion", 0, 100, false);
   check_range(e.adhesion_band, "env/adhesion_band", 0, 1, false);
+  DIVCOLL_THROW_UNLESS(e.contact == ContactLaw::coulomb || e.contact == ContactLaw::no_slip,
+                       "env/contact = " << static_cast<int>(e.contact) << " is not a contact law (coulomb, no_slip)");
+  check_range(e.no_slip_keep, "env/no_slip_keep", 0, 1, false);
 
   // terrain: finite, bounded heights and slopes, sorted, every segment but the first >= 0.01 u wide
   const auto& t = e.terrain;
@@ -132,6 +135,15 @@ void validate_environment(const Environment& e) {
 }
 
 }  // namespace
+
+const char* contact_law_name(ContactLaw law) { return law == ContactLaw::no_slip ? "no_slip" : "coulomb"; }
+
+bool contact_law_from_name(const std::string& name, ContactLaw* law) {
+  if (name == "coulomb") *law = ContactLaw::coulomb;
+  else if (name == "no_slip") *law = ContactLaw::no_slip;
+  else return false;
+  return true;
+}
 
 int agent_input_size(const Constants& c) { return c.n_sines + 4 * kAgentMasses; }
 

@@ -38,6 +38,15 @@ struct Segment {
   double slope = 0;    // dimensionless
 };
 
+// the contact law of SPEC §2.4: coulomb is the spec's (Coulomb friction, κ_t, time of impact); no_slip is
+// DiffTaichi's mass_spring.py advance_toi (the velocity after contact is the surface's, plus κ_ns of the
+// tangential relative velocity; same contact detection and time of impact). src/MODEL.md, "Contact laws"
+enum class ContactLaw : uint8_t { coulomb = 0, no_slip = 1 };
+// "coulomb" / "no_slip"
+const char* contact_law_name(ContactLaw law);
+// the law of that name; false (and *law untouched) for any other name
+bool contact_law_from_name(const std::string& name, ContactLaw* law);
+
 // an environment (SPEC §3): physical constants and terrain
 struct Environment {
   std::string name = "flat";
@@ -50,6 +59,8 @@ struct Environment {
   double wind_period = 4.0;     // s
   double adhesion = 0.0;        // u/s^2, downward pull on masses near the surface
   double adhesion_band = 0.01;  // u, height above the surface where adhesion acts
+  ContactLaw contact = ContactLaw::coulomb;  // the contact law (run.contact)
+  double no_slip_keep = 0.0;    // kappa_ns, tangential relative velocity kept on contact under no_slip only
   std::vector<Segment> terrain{Segment{}};  // sorted by x_start, at least one
 };
 

@@ -57,7 +57,8 @@ void velocity_adjoint(const Model& m, const double* vpb, double* vb, double* Fb)
 struct ContactRecord {
   uint8_t kind = 0;
   uint8_t toi_active = 0;       // t* = φ / (−v'·n) inside [0, h]: differentiable
-  uint8_t friction_active = 0;  // v'' = κ max(0, 1 + μ v_n/|v_t|) v_t + b with the max and |v_t| > 0
+  uint8_t friction_active = 0;  // coulomb: v'' = κ max(0, 1 + μ v_n/|v_t|) v_t + b with the max and |v_t| > 0;
+                                // no_slip: v'' = κ_ns v_t + b with κ_ns > 0 and v_t ≠ 0 (counted, not branched on)
   double n[2] = {0, 0};
   double b[2] = {0, 0};
   double dphi[2] = {0, 0};      // ∂φ/∂p

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "common/version.hpp"
+#include "io/environments.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "io/h5.hpp"
@@ -107,6 +108,7 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
        "deploy.episode_steps"},
       {"run " + testing::source_dir() + "/configs/tiny.toml scaling.draws=50 --out " + path("r.h5"), "scaling.draws"},
       {"run " + testing::source_dir() + "/configs/tiny.toml run.stages=agents,dance --out " + path("r.h5"), "dance"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml run.contact=slippy --out " + path("r.h5"), "run.contact"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --resume --force --out " + path("r.h5"), "contradict"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --from deploy --out " + path("r.h5"), "--base"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --from dance --base " + good + " --out " + path("r.h5"),
@@ -154,6 +156,31 @@ TEST_F(Cli, SceneTakesTheConnectorStiffnessFromTheConfig) {
   }
   const Exec bad = run("scene --kind pair --out " + path("q.h5") + " --config " + path("nope.toml"));
   EXPECT_NE(bad.code, 0);
+}
+
+// run.contact reaches the scene file (`divcoll scene --config`), and simulating that file runs the scene's law:
+// the same travel, bit for bit, as the library on the same scene, and not coulomb's
+TEST_F(Cli, SceneTakesTheContactLawFromTheConfigAndSimulatesIt) {
+  { std::ofstream(path("ns.toml")) << "[run]\ncontact = \"no_slip\"\n"; }
+  for (const char* env : {"ice", "treadmill"}) {
+    const Exec w = run(std::string("scene --kind pair --env ") + env + " --force --out " + path("ns.h5") + " --config " +
+                       path("ns.toml"));
+    ASSERT_EQ(w.code, 0) << w.out;
+    const Exec c = run(std::string("scene --kind pair --env ") + env + " --force --out " + path("cb.h5"));
+    ASSERT_EQ(c.code, 0) << c.out;
+    const sim::Scene s = io::read_scene(path("ns.h5")), cs = io::read_scene(path("cb.h5"));
+    EXPECT_EQ(s.env.contact, sim::ContactLaw::no_slip) << env;
+    EXPECT_EQ(cs.env.contact, sim::ContactLaw::coulomb) << env;
+    EXPECT_EQ(s.env.no_slip_keep, io::environment_table(env).physics.no_slip_keep);
+    const Exec r = run("simulate --scene " + path("ns.h5") + " --steps 200 --force --out " + path("nt.h5"));
+    ASSERT_EQ(r.code, 0) << r.out;
+    sim::RunOptions opt;
+    opt.steps = 200;
+    const double lib = sim::simulate(s, opt).travel, coulomb = sim::simulate(cs, opt).travel;
+    const double file = io::h5::File::open(path("nt.h5")).read_double("travel");
+    EXPECT_EQ(file, lib) << env;
+    EXPECT_NE(file, coulomb) << env;
+  }
 }
 
 }  // namespace

@@ -141,6 +141,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "run.stop_grace_s",
                                              "run.memory_limit_gb",
                                              "run.precision",
+                                             "run.contact",
                                              "agents.population",
                                              "agents.generations",
                                              "agents.epochs",
@@ -480,6 +481,7 @@ TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
   EXPECT_THAT(refusal("[deploy]\nuniform_agents = \"held_out\"\n"),
               AllOf(HasSubstr("connectors.batch_pairs + deploy.pairs = 200"), HasSubstr("agents.population = 100")));
   EXPECT_THAT(refusal("[deploy]\nfeature_placement = \"behind\"\n"), HasSubstr("deploy.feature_placement"));
+  EXPECT_THAT(refusal("[run]\ncontact = \"sticky\"\n"), AllOf(HasSubstr("run.contact"), HasSubstr("no_slip")));
   EXPECT_THAT(refusal("[analysis]\ncell_scale = 0.0\n"), HasSubstr("analysis.cell_scale = 0"));
   EXPECT_THAT(refusal("[connectors]\nclip = \"pair\"\n"), HasSubstr("connectors.clip"));
   EXPECT_THAT(refusal("[analysis]\nfamiliarity_on = \"outputs\"\n"), HasSubstr("analysis.familiarity_on"));

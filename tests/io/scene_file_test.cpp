@@ -65,7 +65,8 @@ void expect_same_scene(const sim::Scene& a, const sim::Scene& b) {
               same_bits(ea.friction, eb.friction) && same_bits(ea.tangent_keep, eb.tangent_keep) &&
               same_bits(ea.belt_speed, eb.belt_speed) && same_bits(ea.wind_amp, eb.wind_amp) &&
               same_bits(ea.wind_period, eb.wind_period) && same_bits(ea.adhesion, eb.adhesion) &&
-              same_bits(ea.adhesion_band, eb.adhesion_band));
+              same_bits(ea.adhesion_band, eb.adhesion_band) && same_bits(ea.no_slip_keep, eb.no_slip_keep));
+  EXPECT_EQ(ea.contact, eb.contact);
   ASSERT_EQ(ea.terrain.size(), eb.terrain.size());
   for (size_t k = 0; k < ea.terrain.size(); ++k) {
     EXPECT_TRUE(same_bits(ea.terrain[k].x_start, eb.terrain[k].x_start)) << "segment " << k;
@@ -172,6 +173,26 @@ TEST_F(FileTest, SceneRoundTripIsBitExact) {
     write_scene(out, s);
     expect_same_scene(s, read_scene(out));
   }
+}
+
+// the contact law and no_slip's retention are written and read back; files written before them (the parity
+// scenes) read as coulomb with kappa_ns = 0
+TEST_F(FileTest, SceneKeepsItsContactLaw) {
+  sim::Scene s = read_scene(parity_scene(kParity[4]));
+  EXPECT_EQ(s.env.contact, sim::ContactLaw::coulomb);
+  EXPECT_EQ(s.env.no_slip_keep, 0.0);
+  {
+    const h5::File f = h5::File::open(parity_scene(kParity[4]));
+    ASSERT_FALSE(f.group("env").has_attribute("contact")) << "the parity scenes predate the attribute";
+  }
+  s.env.contact = sim::ContactLaw::no_slip;
+  s.env.no_slip_keep = 1.0 / 3.0;
+  const std::string out = file("no_slip.h5");
+  write_scene(out, s);
+  const sim::Scene back = read_scene(out);
+  expect_same_scene(s, back);
+  EXPECT_EQ(back.env.contact, sim::ContactLaw::no_slip);
+  EXPECT_EQ(h5::File::open(out).group("env").read_string("contact"), "no_slip");
 }
 
 TEST_F(FileTest, SceneWriteRefusesToOverwrite) {
@@ -366,6 +387,15 @@ TEST_F(BadSceneFile, UnknownEnvironment) {
   EXPECT_THAT(m, HasSubstr("\"moon\", not a known environment"));
   EXPECT_THAT(m, HasSubstr("known: flat, "));
   EXPECT_THAT(m, HasSubstr("treadmill"));
+}
+
+TEST_F(BadSceneFile, UnknownContactLawOrRetentionOutOfRange) {
+  const std::string p = good();
+  h5::File::open(p, /*writable=*/true).group("env").write_string("contact", "sticky_ish");
+  EXPECT_THAT(read_refusal(p), HasSubstr("attribute 'contact' of env is \"sticky_ish\", not a contact law (coulomb, no_slip)"));
+  const std::string q = good();
+  h5::File::open(q, /*writable=*/true).group("env").write_double("no_slip_keep", 1.5);
+  EXPECT_THAT(read_refusal(q), HasSubstr("env/no_slip_keep = 1.5 is out of range [0, 1]"));
 }
 
 TEST_F(BadSceneFile, MissingOrWrongFormat) {

@@ -1,9 +1,11 @@
 // reverse-mode gradients against central finite differences, in every environment, for all four
 // gradient blocks (agent params, connector params, x0, rest lengths), on scenes where floor and wall
-// contact, the friction projection and the belt are active (counted, and asserted)
+// contact, the friction projection and the belt are active (counted, and asserted); the same under the
+// no_slip contact law with kappa_ns = 0 and > 0
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 
 #include "collective/builders.hpp"
@@ -21,13 +23,14 @@ using testing::dot;
 // directions from stream 2
 std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_direction(n, seed, 2); }
 
-// a pair in `env`; terrain features start 0.003 u ahead of the front, so that walls are hit early
-sim::Scene pair_in(const std::string& env) {
+// a pair in `env`; terrain features start 0.05 − back u (0.003 unless said) ahead of the front, so that walls are
+// hit early
+sim::Scene pair_in(const std::string& env, double back = 0.047) {
   const testing::GradientPair& f = testing::gradient_pair();
   sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx - 0.047);
+  s.env = io::place_environment(io::environment_table(env), mx - back);
   return s;
 }
 
@@ -160,6 +163,112 @@ TEST(Gradient, LandingThroughTimeOfImpact) {
     for (size_t i = 0; i < sc.x0.size(); ++i) sc.x0[i] += e * dd[i];
   });
   EXPECT_TRUE(agrees(dot(r.grad_x0, d), n));
+}
+
+// ---- the no_slip contact law (run.contact = "no_slip", src/MODEL.md "Contact laws") ----------------------
+// the same checks under DiffTaichi's no-slip contact: the environment's own kappa_ns (0 but ice's 1/3), and
+// kappa_ns = 0.5 too, so that the tangential retention's adjoint is exercised with and without a belt and at
+// walls. Masses resting exactly on the ground are left out of the x0 direction as above. With kappa_ns = 0 a
+// foot on the ground cannot move, and this untrained pair never reaches a wall in 150 steps however close the
+// step is; with kappa_ns = 0.5 and the step 0.0003 u ahead it does (wall contact with kappa_ns = 0 is in
+// stages_test.cpp)
+struct NoSlipCase {
+  std::string env;
+  double keep;            // kappa_ns; < 0: the environment's own
+  double back = 0.047;    // the features start 0.05 − back u ahead of the front
+  bool walls = false;     // wall contacts expected
+};
+void PrintTo(const NoSlipCase& c, std::ostream* os) { *os << c.env << ", kappa_ns " << c.keep; }
+class NoSlipGradient : public ::testing::TestWithParam<NoSlipCase> {};
+
+sim::Scene no_slip(sim::Scene s, double keep) {
+  s.env.contact = sim::ContactLaw::no_slip;
+  if (keep >= 0) s.env.no_slip_keep = keep;
+  return s;
+}
+
+TEST_P(NoSlipGradient, AllFourBlocksMatchCentralDifferences) {
+  const NoSlipCase& c = GetParam();
+  const sim::Scene s = no_slip(pair_in(c.env, c.back), c.keep);
+  sim::RunOptions opt;
+  opt.steps = kSteps;
+  opt.grad = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  EXPECT_GT(r.contacts.floor, 0);
+  EXPECT_GT(r.contacts.toi, 0);
+  // the retention term is live exactly when kappa_ns > 0
+  if (s.env.no_slip_keep > 0) {
+    EXPECT_GT(r.contacts.sliding, 0);
+  } else {
+    EXPECT_EQ(r.contacts.sliding, 0);
+  }
+  if (c.env == "treadmill") {
+    EXPECT_GT(r.contacts.belt, 0);
+  }
+  if (c.walls) {
+    EXPECT_GT(r.contacts.wall, 0) << "no wall contact";
+  }
+  auto add = [](std::vector<double>& v, const std::vector<double>& d, double e) {
+    for (size_t i = 0; i < v.size(); ++i) v[i] += e * d[i];
+  };
+  std::vector<double> x0_mask(s.x0.size(), 1.0);
+  for (int i = 0; i < s.n_masses(); ++i)
+    if (s.x0[2 * i + 1] == 0.0) x0_mask[2 * i + 1] = 0.0;
+  struct Block {
+    const char* name;
+    const std::vector<double>& grad;
+    Apply apply;
+    std::vector<double> mask;
+  };
+  const std::vector<Block> blocks = {
+      {"agent_params", r.grad_agent_params, [&](sim::Scene& sc, auto& d, double e) { add(sc.agent_params, d, e); },
+       std::vector<double>(s.agent_params.size(), 1.0)},
+      {"connector_params", r.grad_connector_params,
+       [&](sim::Scene& sc, auto& d, double e) { add(sc.connector_params, d, e); },
+       std::vector<double>(s.connector_params.size(), 1.0)},
+      {"x0", r.grad_x0, [&](sim::Scene& sc, auto& d, double e) { add(sc.x0, d, e); }, x0_mask},
+      {"rest_length", r.grad_rest_length, [&](sim::Scene& sc, auto& d, double e) { add(sc.rest_length, d, e); },
+       std::vector<double>(s.rest_length.size(), 1.0)},
+  };
+  for (const Block& b : blocks) {
+    std::vector<double> d = direction(b.grad.size(), 5);
+    for (size_t i = 0; i < d.size(); ++i) d[i] *= b.mask[i];
+    const double analytic = dot(b.grad, d);
+    EXPECT_NE(analytic, 0.0) << c.env << " " << b.name;
+    EXPECT_TRUE(agrees(analytic, fd(s, d, 1e-7, b.apply))) << c.env << " kappa_ns " << s.env.no_slip_keep << " " << b.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Environments, NoSlipGradient,
+                         ::testing::Values(NoSlipCase{"flat", -1}, NoSlipCase{"flat", 0.5}, NoSlipCase{"ice", -1},
+                                           NoSlipCase{"treadmill", -1}, NoSlipCase{"treadmill", 0.5},
+                                           NoSlipCase{"step_up", -1}, NoSlipCase{"step_up", 0.5, 0.0497, true},
+                                           NoSlipCase{"obstacle", -1}, NoSlipCase{"obstacle", 0.5, 0.0497, true},
+                                           NoSlipCase{"sticky", -1},
+                                           NoSlipCase{"sand", -1}),
+                         [](const auto& info) {
+                           return info.param.env + (info.param.keep < 0 ? std::string("_own_keep") : "_keep_half");
+                         });
+
+// a body dropped from above lands under no_slip (kappa_ns = 0 and 0.5): the gradient w.r.t. x0 through the
+// time of impact matches finite differences
+TEST(NoSlipGradient, LandingThroughTimeOfImpact) {
+  for (double keep : {0.0, 0.5}) {
+    sim::Scene s = no_slip(collective::agent_scene(testing::gradient_pair().p, "flat"), keep);
+    for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 0.05;
+    sim::RunOptions opt;
+    opt.steps = kSteps;
+    opt.grad = true;
+    const sim::RunResult r = sim::simulate(s, opt);
+    ASSERT_EQ(r.status, sim::Status::ok);
+    EXPECT_GT(r.contacts.toi, 0);
+    const std::vector<double> d = direction(s.x0.size(), 9);
+    const Differences n = fd(s, d, 1e-7, [](sim::Scene& sc, const std::vector<double>& dd, double e) {
+      for (size_t i = 0; i < sc.x0.size(); ++i) sc.x0[i] += e * dd[i];
+    });
+    EXPECT_TRUE(agrees(dot(r.grad_x0, d), n)) << "kappa_ns " << keep;
+  }
 }
 
 }  // namespace

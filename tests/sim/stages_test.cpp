@@ -1,8 +1,8 @@
 // each stage of the step (sim/stages.hpp) on its own: its adjoint against central differences of
 // L = w · (the stage's outputs), w random, at a random state chosen away from branch changes — springs (with
 // dashpots), free velocity (with wind and adhesion), contact (floor with time of impact, sliding and sticking
-// friction, a resting mass, a wall, a belt, free masses; the branches are asserted) and control (agents and
-// connectors). Whole-rollout gradients are in gradient_test.cpp.
+// friction, a resting mass, a wall, a belt, free masses; the branches are asserted; the same under the no_slip
+// law) and control (agents and connectors). Whole-rollout gradients are in gradient_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -189,6 +189,71 @@ TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
   sim::contact_adjoint(m, vp.data(), vn.data(), rec.data(), wx.data(), wv.data(), vpb.data(), xb.data());
   expect_gradient("x", xb, s.x, 1e-8, 1e-6, L);
   expect_gradient("v'", vpb, vp, 1e-8, 1e-6, L);
+}
+
+// the same placements under the no_slip law (src/MODEL.md "Contact laws"): v'' = b + kappa_ns v_t, with
+// kappa_ns = 0 (DiffTaichi's no-slip) and 0.4; the time of impact and the branches are coulomb's
+TEST(StageAdjoint, NoSlipContactMatchesCentralDifferencesOnEveryBranch) {
+  for (double keep : {0.0, 0.4}) {
+    SCOPED_TRACE(keep);
+    StageState s = make_state(3);
+    s.scene.env.terrain = {sim::Segment{-1.0, -0.1, 0.1}, sim::Segment{1.0, 0.3, 0.0}};
+    s.scene.env.contact = sim::ContactLaw::no_slip;
+    s.scene.env.no_slip_keep = keep;
+    sim::Model m;
+    m.compile(s.scene, 1);
+    auto floor_y = [](double x) { return -0.1 + 0.1 * (x + 1.0); };
+    const int N = s.scene.n_masses();
+    for (int i = 0; i < N; ++i) s.x[2 * i] = -0.5 + 0.05 * i, s.x[2 * i + 1] = floor_y(s.x[2 * i]) + 0.2;
+    auto place = [&](int i, double px, double above, double vx, double vy) {
+      s.x[2 * i] = px;
+      s.x[2 * i + 1] = floor_y(px) + above;
+      s.v[2 * i] = vx;
+      s.v[2 * i + 1] = vy;
+    };
+    place(0, 0.2, 0.001, 1.5, -0.5);    // floor, time of impact inside the step
+    place(1, 0.4, -0.0005, 0.8, -0.3);  // floor, already below (no time of impact)
+    place(2, 0.6, 0.0005, 0.05, -1.0);  // floor, time of impact, slow tangentially
+    place(3, 0.995, 0.05, 2.0, 0.1);    // wall of the step at x = 1
+    place(4, 0.1, 0.001, 0.3, 0.5);     // above the floor, moving up: free
+    Vec& vp = s.v;
+    const Vec wx = random_weights(s.x.size(), 31), wv = random_weights(s.x.size(), 32);
+    std::vector<sim::ContactRecord> rec(N);
+    auto run = [&](sim::ContactRecord* r) {
+      Vec xn(s.x.size()), vn(s.x.size());
+      std::vector<uint8_t> tn(N);
+      sim::contact_forward(m, s.x.data(), vp.data(), xn.data(), vn.data(), tn.data(), r);
+      return std::make_pair(xn, vn);
+    };
+    auto L = [&] {
+      auto [xn, vn] = run(nullptr);
+      return dot(wx, xn) + dot(wv, vn);
+    };
+    const auto [xn, vn] = run(rec.data());
+    for (int i : {0, 2}) {
+      EXPECT_EQ(rec[i].kind, 1);
+      EXPECT_TRUE(rec[i].toi_active);
+      EXPECT_EQ(rec[i].friction_active, keep > 0);
+    }
+    EXPECT_EQ(rec[1].kind, 1);
+    EXPECT_FALSE(rec[1].toi_active);
+    EXPECT_EQ(rec[3].kind, 2);
+    EXPECT_TRUE(rec[3].toi_active);
+    EXPECT_EQ(rec[4].kind, 0);
+    // v'' − b has no normal part, and its tangential part is kappa_ns times v_t
+    for (int i : {0, 1, 2, 3}) {
+      const sim::ContactRecord& r = rec[i];
+      const double rx = vp[2 * i] - r.b[0], ry = vp[2 * i + 1] - r.b[1];
+      const double vnrm = rx * r.n[0] + ry * r.n[1];
+      const double ux = vn[2 * i] - r.b[0], uy = vn[2 * i + 1] - r.b[1];
+      EXPECT_NEAR(ux, keep * (rx - vnrm * r.n[0]), 1e-15) << i;
+      EXPECT_NEAR(uy, keep * (ry - vnrm * r.n[1]), 1e-15) << i;
+    }
+    Vec vpb(s.x.size(), 0.0), xb(s.x.size(), 0.0);
+    sim::contact_adjoint(m, vp.data(), vn.data(), rec.data(), wx.data(), wv.data(), vpb.data(), xb.data());
+    expect_gradient("x", xb, s.x, 1e-8, 1e-6, L);
+    expect_gradient("v'", vpb, vp, 1e-8, 1e-6, L);
+  }
 }
 
 TEST(StageAdjoint, ControlMatchesCentralDifferences) {

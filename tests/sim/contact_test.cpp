@@ -1,0 +1,145 @@
+// the contact laws (src/sim/contact.cpp, src/MODEL.md "Contact laws"): what no_slip does to a whole episode
+// (a mass in contact moves with the ground: at rest on still ground, with the belt on the treadmill; no mass
+// ends below the floor), that the law is a property of the scene stamped by io::set_contact_law, that the
+// environments' kappa_ns is the documented re-reading, and that coulomb ignores kappa_ns. Gradients are in
+// gradient_test.cpp and stages_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "collective/builders.hpp"
+#include "io/environments.hpp"
+#include "sim/engine.hpp"
+#include "testing.hpp"
+
+namespace divcoll {
+namespace {
+
+constexpr int kSteps = 300;
+
+// the pair of the gradient tests in `env` under `law`, its features just ahead of its front
+sim::Scene pair_in(const std::string& env, sim::ContactLaw law) {
+  const testing::GradientPair& f = testing::gradient_pair();
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
+  double mx = -1e9;
+  for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
+  s.env = io::place_environment(io::environment_table(env), mx - 0.047);
+  s.env.contact = law;
+  return s;
+}
+
+sim::RunResult run(const sim::Scene& s, int steps = kSteps) {
+  sim::RunOptions opt;
+  opt.steps = steps;
+  opt.record = true;
+  return sim::simulate(s, opt);
+}
+
+// the terrain height under x (SPEC §3)
+double ground(const sim::Environment& e, double x) {
+  size_t k = e.terrain.size() - 1;
+  while (k > 0 && x < e.terrain[k].x_start) --k;
+  return e.terrain[k].y_start + e.terrain[k].slope * (x - e.terrain[k].x_start);
+}
+
+// under no_slip with kappa_ns = 0, a mass that touched the ground in a step ends it with the ground's velocity:
+// zero on still flat ground, the belt's (−β, 0) on the treadmill
+TEST(NoSlip, AMassInContactMovesWithTheGround) {
+  for (const char* env : {"flat", "treadmill"}) {
+    SCOPED_TRACE(env);
+    const sim::Scene s = pair_in(env, sim::ContactLaw::no_slip);
+    ASSERT_EQ(s.env.no_slip_keep, 0.0);
+    const sim::RunResult r = run(s);
+    ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+    ASSERT_EQ(r.substeps, 1) << "the recorded velocity is the last substep's";
+    const int N = s.n_masses();
+    long touching = 0;
+    for (int t = 1; t <= kSteps; ++t)
+      for (int i = 0; i < N; ++i) {
+        if (!r.touch[static_cast<size_t>(t) * N + i]) continue;
+        ++touching;
+        const double* v = &r.v[(static_cast<size_t>(t) * N + i) * 2];
+        EXPECT_EQ(v[0], -s.env.belt_speed) << "step " << t << " mass " << i;
+        EXPECT_EQ(v[1], 0.0) << "step " << t << " mass " << i;
+      }
+    EXPECT_GT(touching, kSteps) << "masses touch the ground";
+  }
+}
+
+// with kappa_ns > 0 a touching mass keeps that fraction of its tangential velocity (flat: v_y = 0, v_x free)
+TEST(NoSlip, RetentionKeepsPartOfTheTangentialVelocity) {
+  sim::Scene s = pair_in("ice", sim::ContactLaw::no_slip);
+  EXPECT_NEAR(s.env.no_slip_keep, 1.0 / 3.0, 1e-15);
+  const sim::RunResult r = run(s);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  const int N = s.n_masses();
+  long sliding = 0;
+  for (int t = 1; t <= kSteps; ++t)
+    for (int i = 0; i < N; ++i) {
+      if (!r.touch[static_cast<size_t>(t) * N + i]) continue;
+      EXPECT_EQ(r.v[(static_cast<size_t>(t) * N + i) * 2 + 1], 0.0);
+      sliding += r.v[(static_cast<size_t>(t) * N + i) * 2] != 0.0;
+    }
+  EXPECT_GT(sliding, 0) << "ice lets touching masses slide under no_slip";
+}
+
+// in every environment, under either law, no mass ends a step below the ground under it
+TEST(NoSlip, NoMassEndsBelowTheFloor) {
+  for (const std::string& env : io::environment_names())
+    for (sim::ContactLaw law : {sim::ContactLaw::coulomb, sim::ContactLaw::no_slip}) {
+      SCOPED_TRACE(env + " " + sim::contact_law_name(law));
+      const sim::Scene s = pair_in(env, law);
+      const sim::RunResult r = run(s);
+      ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+      const int N = s.n_masses();
+      double worst = 0;
+      for (int t = 0; t <= kSteps; ++t)
+        for (int i = 0; i < N; ++i) {
+          const double* x = &r.x[(static_cast<size_t>(t) * N + i) * 2];
+          worst = std::min(worst, x[1] - ground(s.env, x[0]));
+        }
+      EXPECT_GT(worst, -1e-12);
+    }
+}
+
+// the law travels with the scene: place_environment stamps io::contact_law(), coulomb until set
+TEST(NoSlip, PlacedEnvironmentsCarryTheProcessLaw) {
+  ASSERT_EQ(io::contact_law(), sim::ContactLaw::coulomb);
+  EXPECT_EQ(io::place_environment(io::environment_table("flat"), 0.3).contact, sim::ContactLaw::coulomb);
+  io::set_contact_law(sim::ContactLaw::no_slip);
+  const sim::Environment e = io::place_environment(io::environment_table("ice"), 0.3);
+  const sim::Scene s = collective::agent_scene(testing::gradient_pair().p, "sand");
+  io::set_contact_law(sim::ContactLaw::coulomb);
+  EXPECT_EQ(e.contact, sim::ContactLaw::no_slip);
+  EXPECT_EQ(s.env.contact, sim::ContactLaw::no_slip);
+  EXPECT_EQ(io::place_environment(io::environment_table("ice"), 0.3).contact, sim::ContactLaw::coulomb);
+}
+
+// the re-reading of the paper's friction f as kappa_ns = max(0, 1 − 1/f): ice 1.5 → 1/3, every other
+// environment (default 1.0, sticky 0.85, sand) 0
+TEST(NoSlip, EnvironmentsKeepTheDocumentedTangentialShare) {
+  for (const std::string& env : io::environment_names()) {
+    const double keep = io::environment_table(env).physics.no_slip_keep;
+    if (env == "ice") {
+      EXPECT_NEAR(keep, 1.0 - 1.0 / 1.5, 1e-15);
+    } else {
+      EXPECT_EQ(keep, 0.0) << env;
+    }
+  }
+}
+
+// coulomb reads neither kappa_ns nor anything else of no_slip: the same bits whatever kappa_ns is
+TEST(NoSlip, CoulombIgnoresTheNoSlipRetention) {
+  const sim::Scene s = pair_in("treadmill", sim::ContactLaw::coulomb);
+  sim::Scene t = s;
+  t.env.no_slip_keep = 0.7;
+  const sim::RunResult a = run(s), b = run(t);
+  ASSERT_EQ(a.status, sim::Status::ok);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.v, b.v);
+  // and no_slip is a different law
+  EXPECT_NE(run(pair_in("treadmill", sim::ContactLaw::no_slip)).x, a.x);
+}
+
+}  // namespace
+}  // namespace divcoll
