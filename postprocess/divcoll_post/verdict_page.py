@@ -391,3 +391,90 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
     return path
+
+
+class Paired:
+    """a population under a reading beside the same population under the baseline: effects are differences"""
+
+    def __init__(self, reading: V.Population, base: V.Population):
+        self.r, self.b, self.seed = reading, base, reading.seed
+
+    def draws(self, rng, b):
+        return (self.r.draws(rng, b), self.b.draws(rng, b))
+
+    def has(self, stage):
+        return self.r.has(stage) and self.b.has(stage)
+
+
+def paired_effect(fn):
+    def g(pp, d, pr):
+        dr, db = (None, None) if d is None else d
+        return np.asarray(fn(pp.r, dr, pr), float) - np.asarray(fn(pp.b, db, pr), float)
+    return g
+
+
+def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.B_DEFAULT) -> str:
+    """the readings page: per claim the baseline's verdict and each reading's (each its own Holm family), and the
+    paired difference reading − baseline over the same populations (descriptive: an interval, no verdict)"""
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(folder, "study.toml"), "rb") as fh:
+        man = tomllib.load(fh)
+    names = [v["name"] for v in man["variant"]]
+    docs = {v["name"]: v.get("doc", "") for v in man["variant"]}
+    pops = {v: V.load_study(folder, [v]) for v in names}
+    if not pops.get(baseline):
+        raise ValueError(f"{folder}: no run of variant {baseline} with kept arrays")
+    claims = [c for c in V.CLAIMS if c.family == "M"]
+    res = {v: {r.claim.id: r for r in judge_family(p, "M", claims=claims, B=B)} for v, p in pops.items() if p}
+    base_by_seed = {p.seed: p for p in pops[baseline]}
+    diffs = {}
+    for v, ps in pops.items():
+        if v == baseline or not ps:
+            continue
+        pairs = [Paired(p, base_by_seed[p.seed]) for p in ps if p.seed in base_by_seed]
+        for c in claims:
+            if len(pairs) < 2 or not all(pp.has(s) for pp in pairs for s in c.needs):
+                continue
+            try:
+                point, th = V.bootstrap(pairs, paired_effect(c.effect), B=B)
+            except (KeyError, ValueError, IndexError):
+                continue
+            from scipy.stats import t as tdist
+            n = len(pairs)
+            se = float(np.std(th, ddof=1) * np.sqrt(n / (n - 1)))
+            q = tdist.ppf(0.975, n - 1)
+            m = float(np.mean(point))
+            diffs[(v, c.id)] = (m, m - q * se, m + q * se)
+    cols = [v for v in names if v in res]
+    lines = ["# The paper's claims under each reading", "",
+             f"Study `{man['name']}` ([configs/studies/{man['name']}.toml](../../../configs/studies/{man['name']}.toml)), "
+             "judged by the protocol [configs/studies/verdicts_protocol.md](../../../configs/studies/verdicts_protocol.md) "
+             "§7: each reading is its own family (Holm within it); the baseline is the same populations under the "
+             "defaults. Per cell: the effect [95% interval] and verdict; under it, the paired difference reading − "
+             "baseline over the same populations [95% interval] (what the reading moves; no verdict).", "",
+             "| reading | populations | what it stands for |", "|---|---|---|"]
+    for v in cols:
+        lines.append(f"| {v} | {', '.join(str(p.seed) for p in pops[v])} | {docs[v]} |")
+    lines += ["", "| id | claim | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
+    for c in claims:
+        row = [c.id, c.text]
+        for v in cols:
+            r = res[v][c.id]
+            txt = cell(r)
+            if (v, c.id) in diffs:
+                m, lo, hi = diffs[(v, c.id)]
+                txt += f"<br>Δ {num(m)} [{num(lo)}, {num(hi)}]"
+            row.append(txt)
+        lines.append("| " + " | ".join(row) + " |")
+    counts = {v: {} for v in cols}
+    for v in cols:
+        for r in res[v].values():
+            counts[v][r.verdict] = counts[v].get(r.verdict, 0) + 1
+    lines += ["", "| verdicts | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+    for vd in ["supported", "equivalent", "contradicted", "contradicted (negligible)", "inconclusive",
+               "too few populations", "not measured"]:
+        lines.append(f"| {vd} | " + " | ".join(str(counts[v].get(vd, 0)) for v in cols) + " |")
+    path = os.path.join(out, "readings.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path

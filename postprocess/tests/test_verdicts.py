@@ -141,6 +141,32 @@ class Page(unittest.TestCase):
         finally:
             shutil.rmtree(d)
 
+    def test_the_readings_page_pairs_each_reading_with_its_baseline(self):
+        d = tempfile.mkdtemp()
+        try:
+            import json
+            runs = []
+            for v, bonus in (("baseline", 2.0), ("shifted", 3.0)):
+                rng = np.random.Generator(np.random.PCG64(5))  # the same populations but for the bonus
+                os.makedirs(os.path.join(d, v), exist_ok=True)
+                for s in (1, 2, 3, 4):
+                    with open(os.path.join(d, v, f"seed{s}.arrays.json"), "w") as fh:
+                        json.dump(synthetic(s, rng, wdd_bonus=bonus), fh)
+                    runs.append(f'[[run]]\nvariant = "{v}"\nseed = {s}\npath = "{v}/seed{s}.h5"\nstatus = "complete"\n')
+            with open(os.path.join(d, "study.toml"), "w") as fh:
+                fh.write('format = "divcoll-study"\nname = "synthetic"\n[[variant]]\nname = "baseline"\n'
+                         '[[variant]]\nname = "shifted"\n' + "\n".join(runs))
+            path = verdict_page.readings_page(d, os.path.join(d, "readings"), B=2000)
+            with open(path) as fh:
+                row = [ln for ln in fh if ln.startswith("| C09 |")][0]
+            # the shifted reading moves weak diverse@diverse's lead on flat by exactly 1 BL in every population (the
+            # interval is wider: the two runs' connectors are drawn independently)
+            lo, hi = (float(x) for x in row.split("Δ +1.000 [")[1].split("]")[0].split(", "))
+            self.assertLess(lo, 1.0)
+            self.assertGreater(hi, 1.0)
+        finally:
+            shutil.rmtree(d)
+
     @unittest.skipUnless(os.path.exists(os.path.join(KEPT, "study.toml")), "no kept verdicts study")
     def test_the_committed_page_is_recomputed_from_the_kept_arrays(self):
         committed = os.path.join(os.path.dirname(HERE), "gallery", "verdicts", "verdicts.md")
