@@ -85,7 +85,18 @@ struct Simulator::Impl {
     fit(scratch, control_scratch_count(m));
   }
 
+  // the episode (engine.cpp): run = begin, forward_step per step (failed if one ends it), travel, and with grad
+  // begin_adjoint, adjoint_step per step in reverse, end_adjoint
+  struct Episode;
   RunResult run(const Scene& sc, const RunOptions& opt);
+  Episode begin(const Scene& sc, const RunOptions& opt);
+  bool forward_step(Episode& e, int t);
+  RunResult failed(Episode& e);
+  double travel(Episode& e);
+  void begin_adjoint(Episode& e);
+  void adjoint_step(Episode& e, int t);
+  void flush_float_grads(Episode& e);
+  RunResult end_adjoint(Episode& e);
 };
 
 Simulator::Simulator() : impl_(std::make_unique<Impl>()) {}
@@ -162,7 +173,57 @@ void count_contacts(const ContactRecord* rec, int N, RunResult::ContactCounts& c
 }
 }  // namespace
 
+// one episode in progress: the scene, the options and the shape, and where the forward and adjoint passes stand
+struct Simulator::Impl::Episode {
+  Episode(const Scene& scene, const RunOptions& options, Model& model)
+      : sc(scene), opt(options), m(model), fl(options.float_networks), T(options.steps), n(model.substeps),
+        N(model.N), S(model.S), N2(2 * static_cast<size_t>(model.N)), na(model.agent_layout.activation_count()),
+        nc(model.conn_layout.activation_count() * kConnectorSprings * model.C), cols(kConnectorSprings * model.C) {}
+  const Scene& sc;
+  const RunOptions& opt;
+  Model& m;
+  bool fl;               // networks in float
+  int T, n, N, S;        // steps, substeps, masses, springs
+  size_t N2;             // 2N
+  int na, nc, cols;      // activations of an agent, of the connectors; connector springs
+  int k = 0;             // substep state index: the tape's (grad), or a rolling index modulo 2
+  RunResult res;
+  // adjoint: x̄, v̄ of the current state and the previous one, the parameter-gradient sums
+  double *xbar = nullptr, *vbar = nullptr, *xbar_prev = nullptr, *vbar_prev = nullptr;
+  double *Lbar = nullptr, *ga = nullptr, *gc = nullptr;
+};
+
+namespace {
+// the state k's positions, velocities and contact flags: on the tape with grad, else in a two-state ring
+double* state_x(LineVector<double>& xs, const RunOptions& opt, size_t N2, int k) {
+  return &xs[(opt.grad ? k : k & 1) * N2];
+}
+uint8_t* state_tau(std::vector<uint8_t>& taus, const RunOptions& opt, int N, int k) {
+  return &taus[static_cast<size_t>(opt.grad ? k : k & 1) * N];
+}
+// the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from several
+// arrays at once, which the hardware prefetcher follows poorly: step t − 1's blocks are asked for while step t is
+// being processed
+void prefetch(const void* p, size_t bytes) {
+  const char* c = static_cast<const char*>(p);
+  for (size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q);
+}
+}  // namespace
+
+// the episode: a forward step per control step, then (with grad) an adjoint step per control step in reverse
 RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
+  Episode e = begin(sc, opt);
+  for (int t = 0; t < e.T; ++t)
+    if (!forward_step(e, t)) return failed(e);
+  e.res.travel = travel(e);
+  if (!opt.grad) return std::move(e.res);
+  begin_adjoint(e);
+  for (int t = e.T - 1; t >= 0; --t) adjoint_step(e, t);
+  return end_adjoint(e);
+}
+
+// checks the scene and options, compiles the model, sizes the buffers and writes state 0: x = x0, v = 0, o = 0, τ = 0
+Simulator::Impl::Episode Simulator::Impl::begin(const Scene& sc, const RunOptions& opt) {
   // non-finite controller weights are not refused here: they end the episode with status nan
   validate(sc, ValidateOptions{.finite_params = false});
   DIVCOLL_THROW_UNLESS(opt.steps >= 1, "steps must be at least 1 (got " << opt.steps << ")");
@@ -182,203 +243,221 @@ RunResult Simulator::Impl::run(const Scene& sc, const RunOptions& opt) {
   if (m.A > 0) m.prepare_sines(opt.steps);
   if (opt.float_networks) m.pack_float();
   size_for(m, opt);
-  const bool fl = opt.float_networks;
 
-  const int T = opt.steps, n = m.substeps, N = m.N, S = m.S;
-  const size_t N2 = 2 * static_cast<size_t>(N);
-  const int na = m.agent_layout.activation_count();
-  const int nc = m.conn_layout.activation_count() * kConnectorSprings * m.C;
-  const int cols = kConnectorSprings * m.C;
-
-  RunResult res;
-  res.substeps = n;
+  Episode e(sc, opt, m);
+  const int T = e.T, N = e.N, S = e.S;
+  const size_t N2 = e.N2;
+  RunResult& res = e.res;
+  res.substeps = e.n;
   if (opt.record) {
     res.x.assign((T + 1) * N2, std::numeric_limits<double>::quiet_NaN());
     res.v.assign((T + 1) * N2, std::numeric_limits<double>::quiet_NaN());
     res.touch.assign(static_cast<size_t>(T + 1) * N, 0);
   }
-  if (opt.record_hidden && m.C > 0) res.hidden.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * cols * 32);
+  if (opt.record_hidden && m.C > 0) res.hidden.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * e.cols * 32);
   if (opt.record_inputs && m.C > 0)
-    res.inputs.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * cols * kConnectorInputs);
+    res.inputs.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * e.cols * kConnectorInputs);
 
-  // state 0: x = x0, v = 0, o = 0, τ = 0
   std::copy(sc.x0.begin(), sc.x0.end(), xs.begin());
   std::fill(vs.begin(), vs.begin() + N2, 0.0);
   std::fill(taus.begin(), taus.begin() + N, 0);
   std::fill(os.begin(), os.begin() + S, 0.0);
   if (opt.record) std::copy(sc.x0.begin(), sc.x0.end(), res.x.begin()), std::fill(res.v.begin(), res.v.begin() + N2, 0.0);
+  return e;
+}
 
-  // ---- forward -------------------------------------------------------------------------------------
-  int k = 0;  // substep state index (grad) — rolling index modulo 2 otherwise
-  auto sx = [&](int kk) { return &xs[(opt.grad ? kk : kk & 1) * N2]; };
-  auto sv = [&](int kk) { return &vs[(opt.grad ? kk : kk & 1) * N2]; };
-  auto st = [&](int kk) { return &taus[static_cast<size_t>(opt.grad ? kk : kk & 1) * N]; };
-  for (int t = 0; t < T; ++t) {
-    // control: o'_t from state t (o kept per step on the tape)
-    double* o = &os[(opt.grad ? t + 1 : 0) * static_cast<size_t>(S)];
-    if (opt.grad) std::copy(os.begin() + t * S, os.begin() + (t + 1) * S, o);
-    const size_t ta = (opt.grad ? t : 0) * static_cast<size_t>(m.A) * na, tc = (opt.grad ? t : 0) * static_cast<size_t>(nc);
-    auto control = [&](auto cb) {
-      control_forward(m, t, sx(k), sv(k), st(k), o, cb);
-      if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
-        const auto* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * cols;
-        res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * cols);
-      }
-      if (opt.record_inputs && m.C > 0 && t % opt.hidden_every == 0) {
-        const auto* in = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(0)) * cols;
-        res.inputs.insert(res.inputs.end(), in, in + static_cast<size_t>(kConnectorInputs) * cols);
-      }
-    };
-    if (fl) control(ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc});
-    else control(ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc});
-    // physics substeps
-    for (int s = 0; s < n; ++s, ++k) {
-      double* vp = opt.grad ? &vps[static_cast<size_t>(k) * N2] : vps.data();
-      springs_forward(m, sx(k), sv(k), o, F.data());
-      velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
-      contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
-                      opt.grad ? &recs[static_cast<size_t>(k) * N] : nullptr);
-      if (opt.grad) count_contacts(&recs[static_cast<size_t>(k) * N], N, res.contacts);
+// control step t: the networks (o'_t from state t), the physics substeps, the finiteness check, the recording.
+// False when numerical trouble ended the episode (res says where)
+bool Simulator::Impl::forward_step(Episode& e, int t) {
+  const RunOptions& opt = e.opt;
+  Model& m = e.m;
+  const int n = e.n, N = e.N, S = e.S;
+  const size_t N2 = e.N2;
+  RunResult& res = e.res;
+  int& k = e.k;
+  auto sx = [&](int kk) { return state_x(xs, opt, N2, kk); };
+  auto sv = [&](int kk) { return state_x(vs, opt, N2, kk); };
+  auto st = [&](int kk) { return state_tau(taus, opt, N, kk); };
+  // control: o'_t from state t (o kept per step on the tape)
+  double* o = &os[(opt.grad ? t + 1 : 0) * static_cast<size_t>(S)];
+  if (opt.grad) std::copy(os.begin() + t * S, os.begin() + (t + 1) * S, o);
+  const size_t ta = (opt.grad ? t : 0) * static_cast<size_t>(m.A) * e.na, tc = (opt.grad ? t : 0) * static_cast<size_t>(e.nc);
+  auto control = [&](auto cb) {
+    control_forward(m, t, sx(k), sv(k), st(k), o, cb);
+    if (opt.record_hidden && m.C > 0 && t % opt.hidden_every == 0) {
+      const auto* h2 = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(2)) * e.cols;
+      res.hidden.insert(res.hidden.end(), h2, h2 + static_cast<size_t>(32) * e.cols);
     }
-    // numerical trouble ends the episode, with where it happened
-    const double* x1 = sx(k);
-    const double* v1 = sv(k);
-    for (int i = 0; i < N; ++i) {
-      const bool finite = std::isfinite(x1[2 * i]) && std::isfinite(x1[2 * i + 1]) && std::isfinite(v1[2 * i]) &&
-                          std::isfinite(v1[2 * i + 1]);
-      const bool tame = std::abs(v1[2 * i]) <= opt.speed_limit && std::abs(v1[2 * i + 1]) <= opt.speed_limit;
-      if (!finite || !tame) {
-        res.status = finite ? Status::unstable : Status::nan;
-        res.bad_step = t + 1;
-        res.bad_mass = i;
-        res.message = msg() << (finite ? "runaway velocity" : "non-finite state") << " at step " << t + 1
-                            << ", mass " << i << " (x = " << x1[2 * i] << ", " << x1[2 * i + 1]
-                            << "; v = " << v1[2 * i] << ", " << v1[2 * i + 1] << ")";
-        break;
-      }
+    if (opt.record_inputs && m.C > 0 && t % opt.hidden_every == 0) {
+      const auto* in = cb.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(0)) * e.cols;
+      res.inputs.insert(res.inputs.end(), in, in + static_cast<size_t>(kConnectorInputs) * e.cols);
     }
-    if (opt.record) {
-      std::copy(x1, x1 + N2, res.x.begin() + (t + 1) * N2);
-      std::copy(v1, v1 + N2, res.v.begin() + (t + 1) * N2);
-      std::copy(st(k), st(k) + N, res.touch.begin() + static_cast<size_t>(t + 1) * N);
-    }
-    if (res.status != Status::ok) break;
+  };
+  if (e.fl) control(ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc});
+  else control(ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc});
+  // physics substeps
+  for (int s = 0; s < n; ++s, ++k) {
+    double* vp = opt.grad ? &vps[static_cast<size_t>(k) * N2] : vps.data();
+    springs_forward(m, sx(k), sv(k), o, F.data());
+    velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
+    contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
+                    opt.grad ? &recs[static_cast<size_t>(k) * N] : nullptr);
+    if (opt.grad) count_contacts(&recs[static_cast<size_t>(k) * N], N, res.contacts);
   }
-
-  if (res.status != Status::ok) {
-    res.travel = std::numeric_limits<double>::quiet_NaN();
-    res.contacts = {};  // as before: counted for finished episodes only
-    if (opt.grad) {
-      if (opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(m.A) * m.agent_params, 0.0);
-      res.grad_connector_params.assign(m.C > 0 ? m.conn_params : 0, 0.0);
-      res.grad_x0.assign(N2, 0.0);
-      res.grad_rest_length.assign(S, 0.0);
-    }
-    return res;
-  }
-
-  // travel = mean x at T − mean x at 0
-  const double* xT = sx(k);
-  double sT = 0, s0 = 0;
+  // numerical trouble ends the episode, with where it happened
+  const double* x1 = sx(k);
+  const double* v1 = sv(k);
   for (int i = 0; i < N; ++i) {
-    sT += xT[2 * i];
-    s0 += sc.x0[2 * i];
+    const bool finite = std::isfinite(x1[2 * i]) && std::isfinite(x1[2 * i + 1]) && std::isfinite(v1[2 * i]) &&
+                        std::isfinite(v1[2 * i + 1]);
+    const bool tame = std::abs(v1[2 * i]) <= opt.speed_limit && std::abs(v1[2 * i + 1]) <= opt.speed_limit;
+    if (!finite || !tame) {
+      res.status = finite ? Status::unstable : Status::nan;
+      res.bad_step = t + 1;
+      res.bad_mass = i;
+      res.message = msg() << (finite ? "runaway velocity" : "non-finite state") << " at step " << t + 1
+                          << ", mass " << i << " (x = " << x1[2 * i] << ", " << x1[2 * i + 1]
+                          << "; v = " << v1[2 * i] << ", " << v1[2 * i + 1] << ")";
+      break;
+    }
   }
-  res.travel = sT / N - s0 / N;
-  if (!opt.grad) return res;
+  if (opt.record) {
+    std::copy(x1, x1 + N2, res.x.begin() + (t + 1) * N2);
+    std::copy(v1, v1 + N2, res.v.begin() + (t + 1) * N2);
+    std::copy(st(k), st(k) + N, res.touch.begin() + static_cast<size_t>(t + 1) * N);
+  }
+  return res.status == Status::ok;
+}
 
-  // ---- backward ------------------------------------------------------------------------------------
+// an episode that ended early: travel NaN, no contact counts, zero gradients of the asked-for shapes
+RunResult Simulator::Impl::failed(Episode& e) {
+  RunResult& res = e.res;
+  res.travel = std::numeric_limits<double>::quiet_NaN();
+  res.contacts = {};  // as before: counted for finished episodes only
+  if (e.opt.grad) {
+    if (e.opt.agent_param_grad) res.grad_agent_params.assign(static_cast<size_t>(e.m.A) * e.m.agent_params, 0.0);
+    res.grad_connector_params.assign(e.m.C > 0 ? e.m.conn_params : 0, 0.0);
+    res.grad_x0.assign(e.N2, 0.0);
+    res.grad_rest_length.assign(e.S, 0.0);
+  }
+  return std::move(res);
+}
+
+// travel = mean x at T − mean x at 0
+double Simulator::Impl::travel(Episode& e) {
+  const double* xT = state_x(xs, e.opt, e.N2, e.k);
+  double sT = 0, s0 = 0;
+  for (int i = 0; i < e.N; ++i) {
+    sT += xT[2 * i];
+    s0 += e.sc.x0[2 * i];
+  }
+  return sT / e.N - s0 / e.N;
+}
+
+// the adjoint's seed ∂travel/∂x_T = (1/N, 0) and zeroed sums
+void Simulator::Impl::begin_adjoint(Episode& e) {
+  const RunOptions& opt = e.opt;
+  Model& m = e.m;
+  const int N = e.N, S = e.S;
   g_agent.assign(opt.agent_param_grad ? static_cast<size_t>(m.A) * m.agent_params : 0, 0.0);
   g_conn.assign(m.C > 0 ? m.conn_params : 0, 0.0);
-  res.grad_rest_length.assign(S, 0.0);
-  double* Lbar = res.grad_rest_length.data();
-  double* ga = opt.agent_param_grad ? g_agent.data() : nullptr;
-  double* gc = m.C > 0 ? g_conn.data() : nullptr;
-  // seed: ∂travel/∂x_T = (1/N, 0)
-  double* xbar = xb.data();
-  double* vbar = vb.data();
-  double* xbar_prev = xb2.data();
-  double* vbar_prev = vb2.data();
+  e.res.grad_rest_length.assign(S, 0.0);
+  e.Lbar = e.res.grad_rest_length.data();
+  e.ga = opt.agent_param_grad ? g_agent.data() : nullptr;
+  e.gc = m.C > 0 ? g_conn.data() : nullptr;
+  e.xbar = xb.data();
+  e.vbar = vb.data();
+  e.xbar_prev = xb2.data();
+  e.vbar_prev = vb2.data();
   for (int i = 0; i < N; ++i) {
-    xbar[2 * i] = 1.0 / N;
-    xbar[2 * i + 1] = 0;
+    e.xbar[2 * i] = 1.0 / N;
+    e.xbar[2 * i + 1] = 0;
   }
-  std::fill(vbar, vbar + N2, 0.0);
+  std::fill(e.vbar, e.vbar + e.N2, 0.0);
   std::fill(ob.begin(), ob.begin() + S, 0.0);
   // float_networks: the parameter gradients are summed in float over at most kFloatGradSteps steps, then added
   // into the double sums (float's rounding of a sum of 16 terms, not of 1000; zeroing and adding every step
   // cost as much as an agent's network)
-  if (fl) {
+  if (e.fl) {
     g_agent_f.assign(opt.agent_param_grad ? static_cast<size_t>(m.A) * m.agent_params : 0, 0.0f);
     g_conn_f.assign(m.C > 0 ? m.conn_params : 0, 0.0f);
   }
-  auto flush_float_grads = [&] {
-    auto add = [](LineVector<float>& f, double* into) {
-      for (size_t q = 0; q < f.size(); ++q) into[q] += f[q], f[q] = 0.0f;
-    };
-    if (!g_agent_f.empty()) add(g_agent_f, ga);
-    if (!g_conn_f.empty()) add(g_conn_f, gc);
+}
+
+void Simulator::Impl::flush_float_grads(Episode& e) {
+  auto add = [](LineVector<float>& f, double* into) {
+    for (size_t q = 0; q < f.size(); ++q) into[q] += f[q], f[q] = 0.0f;
   };
-  // the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from
-  // several arrays at once, which the hardware prefetcher follows poorly: step t − 1's blocks are asked for
-  // while step t is being processed
-  auto prefetch = [](const void* p, size_t bytes) {
-    const char* c = static_cast<const char*>(p);
-    for (size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q);
-  };
-  for (int t = T - 1; t >= 0; --t) {
-    if (t > 0) {
-      const size_t k0 = static_cast<size_t>(t - 1) * n;
-      if (fl) {
-        prefetch(&agent_acts_f[static_cast<size_t>(t - 1) * m.A * na], sizeof(float) * m.A * na);
-        prefetch(&conn_acts_f[static_cast<size_t>(t - 1) * nc], sizeof(float) * nc);
-      } else {
-        prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
-        prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
-      }
-      prefetch(&recs[k0 * N], sizeof(ContactRecord) * n * N);
-      prefetch(&xs[k0 * N2], sizeof(double) * n * N2);
-      prefetch(&vs[k0 * N2], sizeof(double) * n * N2);
-      prefetch(&vps[k0 * N2], sizeof(double) * n * N2);
-      prefetch(&os[static_cast<size_t>(t) * S], sizeof(double) * S);
-    }
-    const double* o = &os[(t + 1) * static_cast<size_t>(S)];
-    for (int s = n - 1; s >= 0; --s) {
-      --k;
-      const double* vp = &vps[static_cast<size_t>(k) * N2];
-      // contact: x̄_{k+1}, v̄_{k+1} → v̄', x̄_k (partial)
-      std::fill(xbar_prev, xbar_prev + N2, 0.0);
-      std::fill(vbar_prev, vbar_prev + N2, 0.0);
-      contact_adjoint(m, vp, sv(k + 1), &recs[static_cast<size_t>(k) * N], xbar, vbar, vpb.data(), xbar_prev);
-      velocity_adjoint(m, vpb.data(), vbar_prev, Fb.data());
-      springs_adjoint(m, sx(k), sv(k), o, Fb.data(), xbar_prev, vbar_prev, ob.data(), Lbar);
-      std::swap(xbar, xbar_prev);
-      std::swap(vbar, vbar_prev);
-    }
-    const size_t ta = static_cast<size_t>(t) * m.A * na, tc = static_cast<size_t>(t) * nc;
-    if (fl) {
-      control_adjoint(m, t, sx(k), sv(k), ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc},
-                      ob.data(), xbar, vbar, Lbar, opt.agent_param_grad ? g_agent_f.data() : nullptr,
-                      m.C > 0 ? g_conn_f.data() : nullptr, scratch_f.data());
-      if (t % kFloatGradSteps == 0) flush_float_grads();
+  if (!g_agent_f.empty()) add(g_agent_f, e.ga);
+  if (!g_conn_f.empty()) add(g_conn_f, e.gc);
+}
+
+// the adjoint of control step t: the substeps' contact, velocity and spring adjoints in reverse, then the
+// networks'; at a window boundary of truncated backpropagation the seed restarts
+void Simulator::Impl::adjoint_step(Episode& e, int t) {
+  const RunOptions& opt = e.opt;
+  Model& m = e.m;
+  const int n = e.n, N = e.N, S = e.S;
+  const size_t N2 = e.N2;
+  const int na = e.na, nc = e.nc;
+  int& k = e.k;
+  auto sx = [&](int kk) { return state_x(xs, opt, N2, kk); };
+  auto sv = [&](int kk) { return state_x(vs, opt, N2, kk); };
+  if (t > 0) {
+    const size_t k0 = static_cast<size_t>(t - 1) * n;
+    if (e.fl) {
+      prefetch(&agent_acts_f[static_cast<size_t>(t - 1) * m.A * na], sizeof(float) * m.A * na);
+      prefetch(&conn_acts_f[static_cast<size_t>(t - 1) * nc], sizeof(float) * nc);
     } else {
-      control_adjoint(m, t, sx(k), sv(k), ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc},
-                      ob.data(), xbar, vbar, Lbar, ga, gc, scratch.data());
+      prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
+      prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
     }
-    // truncated backpropagation: state t starts a window and ends the previous one, whose seed restarts here
-    if (opt.grad_window > 0 && t > 0 && t % opt.grad_window == 0) {
-      for (int i = 0; i < N; ++i) xbar[2 * i] = 1.0 / N, xbar[2 * i + 1] = 0;
-      std::fill(vbar, vbar + N2, 0.0);
-      std::fill(ob.begin(), ob.begin() + S, 0.0);
-    }
+    prefetch(&recs[k0 * N], sizeof(ContactRecord) * n * N);
+    prefetch(&xs[k0 * N2], sizeof(double) * n * N2);
+    prefetch(&vs[k0 * N2], sizeof(double) * n * N2);
+    prefetch(&vps[k0 * N2], sizeof(double) * n * N2);
+    prefetch(&os[static_cast<size_t>(t) * S], sizeof(double) * S);
   }
-  if (fl) flush_float_grads();
-  if (opt.agent_param_grad) res.grad_agent_params.assign(g_agent.begin(), g_agent.end());
+  const double* o = &os[(t + 1) * static_cast<size_t>(S)];
+  for (int s = n - 1; s >= 0; --s) {
+    --k;
+    const double* vp = &vps[static_cast<size_t>(k) * N2];
+    // contact: x̄_{k+1}, v̄_{k+1} → v̄', x̄_k (partial)
+    std::fill(e.xbar_prev, e.xbar_prev + N2, 0.0);
+    std::fill(e.vbar_prev, e.vbar_prev + N2, 0.0);
+    contact_adjoint(m, vp, sv(k + 1), &recs[static_cast<size_t>(k) * N], e.xbar, e.vbar, vpb.data(), e.xbar_prev);
+    velocity_adjoint(m, vpb.data(), e.vbar_prev, Fb.data());
+    springs_adjoint(m, sx(k), sv(k), o, Fb.data(), e.xbar_prev, e.vbar_prev, ob.data(), e.Lbar);
+    std::swap(e.xbar, e.xbar_prev);
+    std::swap(e.vbar, e.vbar_prev);
+  }
+  const size_t ta = static_cast<size_t>(t) * m.A * na, tc = static_cast<size_t>(t) * nc;
+  if (e.fl) {
+    control_adjoint(m, t, sx(k), sv(k), ControlBuffers<float>{agent_acts_f.data() + ta, conn_acts_f.data() + tc},
+                    ob.data(), e.xbar, e.vbar, e.Lbar, opt.agent_param_grad ? g_agent_f.data() : nullptr,
+                    m.C > 0 ? g_conn_f.data() : nullptr, scratch_f.data());
+    if (t % kFloatGradSteps == 0) flush_float_grads(e);
+  } else {
+    control_adjoint(m, t, sx(k), sv(k), ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc},
+                    ob.data(), e.xbar, e.vbar, e.Lbar, e.ga, e.gc, scratch.data());
+  }
+  // truncated backpropagation: state t starts a window and ends the previous one, whose seed restarts here
+  if (opt.grad_window > 0 && t > 0 && t % opt.grad_window == 0) {
+    for (int i = 0; i < N; ++i) e.xbar[2 * i] = 1.0 / N, e.xbar[2 * i + 1] = 0;
+    std::fill(e.vbar, e.vbar + N2, 0.0);
+    std::fill(ob.begin(), ob.begin() + S, 0.0);
+  }
+}
+
+// the gradients out: the parameter sums, and x0's (the initial state and travel's baseline)
+RunResult Simulator::Impl::end_adjoint(Episode& e) {
+  if (e.fl) flush_float_grads(e);
+  RunResult& res = e.res;
+  if (e.opt.agent_param_grad) res.grad_agent_params.assign(g_agent.begin(), g_agent.end());
   res.grad_connector_params.assign(g_conn.begin(), g_conn.end());
-  // x0 is both the initial state and travel's baseline
-  res.grad_x0.assign(xbar, xbar + N2);
-  for (int i = 0; i < N; ++i) res.grad_x0[2 * i] -= 1.0 / N;
-  return res;
+  res.grad_x0.assign(e.xbar, e.xbar + e.N2);
+  for (int i = 0; i < e.N; ++i) res.grad_x0[2 * i] -= 1.0 / e.N;
+  return std::move(res);
 }
 
 }  // namespace divcoll::sim
