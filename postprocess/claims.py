@@ -20,8 +20,7 @@ from divcoll_post import analysis as A
 from divcoll_post.runfile import RunFileError
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import STAGES, text as _s  # noqa: E402
 
 
 class Run:
@@ -31,7 +30,7 @@ class Run:
         self.path = path
         with h5py.File(path, "r") as f:
             self.has = {st: st in f and _s(f[st].attrs.get("status", "")) == "complete"
-                        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]}
+                        for st in STAGES}
             self.fitness = f["agents/final/fitness"][()] if "agents/final" in f else None
             self.gen0_untrained = None
             if "agents/gen_000/curve_u" in f:

@@ -32,8 +32,7 @@ TYPES = [("weak_uniform@uniform", "uniform pair, weak uniform-trained"),
          ("weak_diverse@diverse", "diverse pair, weak diverse-trained")]
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import text as _s  # noqa: E402
 
 
 def run(cmd):

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import h5py
 
-STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
+from divcoll_post.runfile import STAGES  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULTS = os.path.join(os.path.dirname(HERE), "configs", "paper.toml")  # every key's built-in default
 DEFAULT_GRAD_FACTOR = 2.6  # jobs/BENCHMARKS.md: a pair's forward steps/s over its forward+backward steps/s
@@ -241,8 +241,7 @@ class StageCost:
         return self.c_fit if kind == "fit" else self.c_sim
 
 
-def _s(x):
-    return x.decode() if isinstance(x, bytes) else str(x)
+from divcoll_post.runfile import text as _s  # noqa: E402
 
 
 def read_run(path, defaults):

@@ -29,11 +29,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
+from divcoll_post.runfile import STAGES  # noqa: E402
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import text as _s  # noqa: E402
 
 
 def parse_serial(text):

@@ -63,8 +63,7 @@ class InputError(Exception):
     pass
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import text as _s  # noqa: E402
 
 
 def run(cmd):

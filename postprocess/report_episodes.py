@@ -17,8 +17,7 @@ import h5py
 import numpy as np
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import text as _s  # noqa: E402
 
 
 def _median_ok(travel, status):

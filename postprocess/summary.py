@@ -14,8 +14,7 @@ import h5py
 import numpy as np
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from divcoll_post.runfile import STAGES, text as _s  # noqa: E402
 
 
 def ok_mean(travel, status):
@@ -61,7 +60,7 @@ def summarize(path):
           f"ended {_s(f.attrs.get('end_time', '(not finished)'))}\n")
         w("| stage | status | wall time (s, summed over sessions) | last session: ranks, busy share, master busy, "
           "imbalance (max / mean busy) |\n|---|---|---|---|")
-        for st in ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]:
+        for st in STAGES:
             if st in f:
                 g = f[st]
                 wall = g.attrs.get("wall_s", g.attrs.get("wall_s_last_session", float("nan")))

@@ -37,7 +37,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .runfile import RunFileError, RunMeta, _decode, _open, _meta
+from .runfile import RunFileError, RunMeta, _decode, _open, _meta, text
 
 BOOT_RESAMPLES = 1000
 BOOT_SEED = 0
@@ -172,9 +172,7 @@ def stat(groups: Sequence[Tuple[np.ndarray, np.ndarray]], err: str = "ci",
 # reading
 
 
-def _s(v) -> str:
-    v = _decode(v)
-    return v if isinstance(v, str) else str(v)
+_s = text
 
 
 def _list_attr(g, name: str, where: str) -> List[str]:

@@ -109,6 +109,16 @@ class Population:
         return x.max(axis=1) - x.min(axis=1)
 
 
+# the pipeline's stages in order (src/io/pipeline.hpp's stage list): every stage group a run file can hold
+STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
+
+
+def text(v) -> str:
+    """an HDF5 attribute or string value as text (bytes decoded, 0-d arrays and numpy scalars unwrapped)"""
+    v = _decode(v)
+    return v if isinstance(v, str) else str(v)
+
+
 def _decode(v):
     if isinstance(v, (bytes, np.bytes_)):
         return v.decode("utf-8", "replace")

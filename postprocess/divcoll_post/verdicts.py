@@ -31,8 +31,7 @@ WU, WD = "weak_uniform@uniform", "weak_diverse@diverse"
 SEVERE = 0.25  # "severe": a relative drop of more than a quarter (protocol §5)
 
 
-def _s(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
+from .runfile import text as _s  # noqa: E402
 
 
 def _list_attr(g, name):
