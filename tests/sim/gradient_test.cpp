@@ -100,7 +100,9 @@ void check_blocks(const sim::Scene& s, const sim::RunResult& r, const std::strin
     std::vector<double> d = direction(b.grad.size(), 5);
     for (size_t i = 0; i < d.size(); ++i) d[i] *= b.mask[i];
     const double analytic = dot(b.grad, d);
-    if (nonzero) EXPECT_NE(analytic, 0.0) << label << " " << b.name;
+    if (nonzero) {
+      EXPECT_NE(analytic, 0.0) << label << " " << b.name;
+    }
     EXPECT_TRUE(agrees(analytic, fd(s, d, 1e-7, b.apply))) << label << " " << b.name;
   }
 }
