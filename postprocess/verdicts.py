@@ -1,6 +1,6 @@
 """The verdict page of a study judged by the pre-registered protocol (configs/studies/verdicts_protocol.md).
 
-    /usr/bin/python3 postprocess/verdicts.py STUDY_DIR [--out DIR] [--resamples B] [--readings]
+    /usr/bin/python3 postprocess/verdicts.py STUDY_DIR [--out DIR] [--resamples B] [--readings] [--readme README.md]
 
 STUDY_DIR is a study folder (`divcoll study --out`) or its kept copy (postprocess/gallery/studies/NAME): the page
 reads the `*.arrays.json` beside the run summaries, which `divcoll report STUDY_DIR` writes from the run files.
@@ -21,6 +21,8 @@ def main(argv=None):
     ap.add_argument("study", help="study folder or its kept copy")
     ap.add_argument("--out", help="output folder (default STUDY/verdicts)")
     ap.add_argument("--resamples", type=int, default=verdicts.B_DEFAULT, help="bootstrap resamples (protocol: 20000)")
+    ap.add_argument("--readme", metavar="README",
+                    help="also rewrite README's block between <!-- verdict table --> and <!-- /verdict table -->")
     ap.add_argument("--readings", action="store_true",
                     help="the readings page: every variant against the study's baseline on the same populations")
     a = ap.parse_args(argv)
@@ -29,6 +31,8 @@ def main(argv=None):
             path = verdict_page.readings_page(a.study, a.out or os.path.join(a.study, "readings"), B=a.resamples)
         else:
             path = verdict_page.write(a.study, a.out or os.path.join(a.study, "verdicts"), B=a.resamples)
+            if a.readme:
+                verdict_page.write_readme_table(a.study, a.readme, B=a.resamples)
     except (OSError, ValueError, KeyError, tomllib.TOMLDecodeError) as e:
         print(f"verdicts: {e}", file=sys.stderr)
         return 2

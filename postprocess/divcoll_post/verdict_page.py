@@ -55,7 +55,8 @@ def cell(r):
         return f"{num(r.estimate)} {r.claim.unit} · {r.verdict} ({r.reason})"
     v = f"**{r.verdict}**"
     if r.verdict == "inconclusive" and np.isfinite(r.power):
-        v += f" (power {r.power:.2f}; 80% at n ≈ {int(r.n80)})"
+        v += f" (power {r.power:.2f}; " + (f"80% at n ≈ {int(r.n80)})" if np.isfinite(r.n80) else
+                                            "80% beyond 10,000 populations)")
     return f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {r.claim.unit} · {v}"
 
 
@@ -441,7 +442,8 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
                 continue
             from scipy.stats import t as tdist
             n = len(pairs)
-            se = float(np.std(th, ddof=1) * np.sqrt(n / (n - 1)))
+            q25, q75 = np.quantile(th, [0.25, 0.75])
+            se = float((q75 - q25) / 1.349 * np.sqrt(n / (n - 1)))
             q = tdist.ppf(0.975, n - 1)
             m = float(np.mean(point))
             diffs[(v, c.id)] = (m, m - q * se, m + q * se)
@@ -478,3 +480,43 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
     return path
+
+
+README_BEGIN, README_END = "<!-- verdict table -->", "<!-- /verdict table -->"
+
+
+def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
+    """the README's results: one row per claim (effect, interval, verdict) from a kept verdicts study"""
+    main = V.load_study(folder, MAIN_VARIANTS)
+    supp = [p for p in V.load_study(folder, SUPPLEMENT_VARIANTS)
+            if any(p.has(s) for s in ("specialists", "scaling", "graded"))]
+    res = judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
+    with open(os.path.join(folder, "study.toml"), "rb") as fh:
+        planned = len({r["seed"] for r in tomllib.load(fh)["run"]})
+    lines = [f"Main text: {len(main)} of {planned} populations; supplement and Fig. 4: {len(supp)} of 5"
+             + (" (interim: the study is still running, and verdicts can move as populations arrive)."
+                if len(main) < planned or len(supp) < 5 else "."), "",
+             "| | claim | paper | effect [95% interval] | verdict |", "|---|---|---|---|---|"]
+    for r in res:
+        c = r.claim
+        if np.isfinite(r.lo):
+            eff = f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {c.unit}".rstrip()
+        elif np.isfinite(r.estimate):
+            eff = f"{num(r.estimate)} {c.unit}".rstrip()
+        else:
+            eff = "—"
+        vd = r.verdict + (f" ({r.reason})" if r.verdict == "not measured" and r.reason else "")
+        lines.append(f"| {c.id} | {c.text} | {c.paper} | {eff} | {vd} |")
+    return lines
+
+
+def write_readme_table(folder: str, readme: str, B: int = V.B_DEFAULT) -> None:
+    """replaces the README's block between the verdict-table markers with readme_table(folder)"""
+    with open(readme) as fh:
+        s = fh.read()
+    if README_BEGIN not in s or README_END not in s:
+        raise ValueError(f"{readme} has no block between {README_BEGIN} and {README_END}")
+    a, b = s.index(README_BEGIN) + len(README_BEGIN), s.index(README_END)
+    s = s[:a] + "\n" + "\n".join(readme_table(folder, B)) + "\n" + s[b:]
+    with open(readme, "w") as fh:
+        fh.write(s)

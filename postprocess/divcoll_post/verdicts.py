@@ -660,7 +660,10 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
         r.estimate = float(np.mean(point))
         # the hierarchical bootstrap's standard error, corrected for the bootstrap's (n − 1)/n shrinkage of a mean's
         # variance, with Student t quantiles on n − 1 degrees of freedom (protocol §3, amendment A2)
-        r.se = float(np.std(th, ddof=1) * math.sqrt(n / (n - 1)))
+        # (amendment A4: the spread of the resamples as their interquartile range / 1.349, the normal's sd, so that
+        # the rare resamples where a ratio's denominator nears 0 do not set it)
+        q25, q75 = np.quantile(th, [0.25, 0.75])
+        r.se = float((q75 - q25) / 1.349 * math.sqrt(n / (n - 1)))
         q = tdist.ppf(0.975, n - 1)
         r.lo, r.hi = r.estimate - q * r.se, r.estimate + q * r.se
         half = q * np.std(point, ddof=1) / math.sqrt(n)

@@ -176,6 +176,12 @@ class Page(unittest.TestCase):
             table = lambda t: [ln for ln in t.splitlines() if ln.startswith("|")]  # noqa: E731
             with open(path) as a, open(committed) as b:
                 self.assertEqual(table(a.read()), table(b.read()))
+            # and the README's results table is the same study's
+            with open(os.path.join(os.path.dirname(os.path.dirname(HERE)), "README.md")) as fh:
+                readme = fh.read()
+            block = readme[readme.index(verdict_page.README_BEGIN) + len(verdict_page.README_BEGIN):
+                           readme.index(verdict_page.README_END)]
+            self.assertEqual(block.strip().splitlines(), verdict_page.readme_table(KEPT))
         finally:
             shutil.rmtree(d)
 
