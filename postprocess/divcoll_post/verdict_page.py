@@ -68,7 +68,7 @@ def forest(results: Sequence[V.Result], path, title):
     rs = [r for r in results if np.isfinite(r.lo)]
     if not rs:
         return False
-    fig, ax = plt.subplots(figsize=(8, 0.32 * len(rs) + 1.2))
+    fig, ax = plt.subplots(figsize=(10, 0.32 * len(rs) + 1.6))
     for i, r in enumerate(rs):
         c = r.claim
         if c.form == "band":
@@ -85,8 +85,9 @@ def forest(results: Sequence[V.Result], path, title):
     for x, ls in [(0, "-"), (1, "--"), (-1, ":")]:
         ax.axvline(x, color="k", lw=0.6, ls=ls)
     ax.set_xscale("symlog", linthresh=2)
-    ax.set_xlabel("effect / margin (band claims: (θ − centre) / half-width); 0 solid, +margin dashed, −margin dotted")
-    ax.set_title(title, fontsize=8)
+    ax.set_xlabel("effect / margin (band claims: (θ − centre) / half-width)\n0 solid, +margin dashed, −margin dotted; "
+                  "green supported, red contradicted, grey inconclusive", fontsize=8)
+    ax.set_title(title, fontsize=8, wrap=True)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -332,7 +333,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
     for r in res:
         counts[r.verdict] = counts.get(r.verdict, 0) + 1
     lines += ["Verdicts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + ".", ""]
-    if forest(res, os.path.join(out, "forest.png"), f"every claim: estimate and 95% interval over populations, in "
+    if forest(res, os.path.join(out, "forest.png"), f"every claim: estimate and 95% interval over populations\nin "
               f"units of its margin (main text n = {len(main)}, supplement n = {len(supp)})"):
         lines += ["![forest plot](forest.png)", ""]
     lines += ["| id | claim | paper | effect [95% interval] · verdict (same episode length) | training length | "
