@@ -186,5 +186,55 @@ class Page(unittest.TestCase):
             shutil.rmtree(d)
 
 
+BIN = os.path.abspath(os.environ.get("DIVCOLL_BINARY", os.path.join(os.path.dirname(os.path.dirname(HERE)), "build",
+                                                                   "divcoll")))
+
+
+@unittest.skipUnless(os.path.exists(BIN), f"no divcoll binary at {BIN} (set DIVCOLL_BINARY)")
+class Extract(unittest.TestCase):
+    """a run's kept arrays are the run file's own numbers"""
+
+    @classmethod
+    def setUpClass(cls):
+        import subprocess
+        cls.tmp = tempfile.mkdtemp()
+        cls.path = os.path.join(cls.tmp, "tiny.h5")
+        repo = os.path.dirname(os.path.dirname(HERE))
+        subprocess.run([BIN, "run", os.path.join(repo, "configs", "tiny.toml"), "--out", cls.path,
+                        "connectors.replicates=2", "deploy.early_step=50"], check=True, capture_output=True)
+        cls.a = V.extract(cls.path)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp)
+
+    def test_dtw_per_connector_is_the_analysis_stages_replicate_means(self):
+        import h5py
+        with h5py.File(self.path, "r") as f:
+            rm = f["analysis/adversity/replicate_means"][()]
+            types = V._list_attr(f["analysis"], "types")
+        for ti, t in enumerate(types):
+            np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["worse"], rm[ti, 0], rtol=1e-12)
+            np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["better"], rm[ti, 1], rtol=1e-12)
+
+    def test_travel_is_the_mean_over_ok_episodes(self):
+        import h5py
+        with h5py.File(self.path, "r") as f:
+            t, st = f["deploy/collectives/travel_bl"][()], f["deploy/collectives/status"][()]
+            fit = f["agents/final/fitness"][()]
+        coll = np.array(self.a["deploy"]["collectives_bl"])
+        self.assertEqual(coll.shape, t.shape[:3])
+        e, ti, r = 1, 3, 1
+        ok = st[e, ti, r] == 0
+        self.assertAlmostEqual(coll[e, ti, r], t[e, ti, r][ok].mean(), places=12)
+        self.assertAlmostEqual(self.a["agents"]["fitness_mean"], fit.mean(), places=12)
+        self.assertIn("alone_bl_early", self.a["deploy"])
+        # and a population built from them has every claim of the main text computable
+        p = V.Population(1, [self.a])
+        for c in V.CLAIMS:
+            if c.family == "M" and c.id != "C24":  # the tiny preset has no wind
+                self.assertEqual(np.asarray(c.effect(p, None, "same_length")).shape, (1,), c.id)
+
+
 if __name__ == "__main__":
     unittest.main()
