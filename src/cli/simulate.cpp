@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -254,9 +255,11 @@ int demo(const DemoArgs& a) {
   return 0;
 }
 
+// every built-in environment: its scalar fields (sim::kEnvironmentFields) and its terrain
 int envs() {
-  std::printf("%-12s %7s %7s %7s %7s %7s %7s %7s %7s %7s  %s\n", "name", "gravity", "damping", "mu", "kappa_t",
-              "belt", "wind", "adhes.", "band", "kap_ns", "terrain (dx, y, slope) from x_f");
+  std::printf("%-12s", "name");
+  for (const sim::EnvironmentField& f : sim::kEnvironmentFields) std::printf(" %*s", std::max<int>(7, std::strlen(f.name)), f.name);
+  std::printf("  %s\n", "terrain (dx, y, slope) from x_f");
   for (const auto& t : io::builtin_environments()) {
     const auto& e = t.physics;
     std::string ter;
@@ -265,9 +268,10 @@ int envs() {
       std::snprintf(buf, sizeof buf, "(%g, %g, %g) ", s.x_start, s.y_start, s.slope);
       ter += buf;
     }
-    std::printf("%-12s %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g %7.3g  %s\n", e.name.c_str(), e.gravity,
-                e.damping, e.friction, e.tangent_keep, e.belt_speed, e.wind_amp, e.adhesion, e.adhesion_band,
-                e.no_slip_keep, ter.empty() ? "flat" : ter.c_str());
+    std::printf("%-12s", e.name.c_str());
+    for (const sim::EnvironmentField& f : sim::kEnvironmentFields)
+      std::printf(" %*.3g", std::max<int>(7, std::strlen(f.name)), e.*(f.field));
+    std::printf("  %s\n", ter.empty() ? "flat" : ter.c_str());
   }
   return 0;
 }

@@ -12,26 +12,8 @@
 namespace divcoll::io {
 namespace {
 
-struct Key {
-  const char* name;
-  double sim::Environment::*field;
-  double lo, hi;
-  bool lo_open;
-};
-
-// every scalar key with its allowed range (documented in configs/environments.toml)
-const Key kKeys[] = {
-    {"gravity", &sim::Environment::gravity, -100, 0, false},
-    {"damping", &sim::Environment::damping, 0, 1000, false},
-    {"friction", &sim::Environment::friction, 0, 100, false},
-    {"tangent_keep", &sim::Environment::tangent_keep, 0, 1, false},
-    {"belt_speed", &sim::Environment::belt_speed, 0, 10, false},
-    {"wind_amp", &sim::Environment::wind_amp, -100, 100, false},
-    {"wind_period", &sim::Environment::wind_period, 0, 1e6, true},
-    {"adhesion", &sim::Environment::adhesion, 0, 100, false},
-    {"adhesion_band", &sim::Environment::adhesion_band, 0, 1, false},
-    {"no_slip_keep", &sim::Environment::no_slip_keep, 0, 1, false},
-};
+// every scalar key with its allowed range: sim::kEnvironmentFields (documented in configs/environments.toml)
+using Key = sim::EnvironmentField;
 
 double number_of(const toml::node& n, const std::string& where) {
   if (auto v = n.value<double>()) return *v;
@@ -69,11 +51,11 @@ void read_table(const toml::table& t, const std::string& where, sim::Environment
       continue;
     }
     const Key* found = nullptr;
-    for (const Key& kk : kKeys)
+    for (const Key& kk : sim::kEnvironmentFields)
       if (key == kk.name) found = &kk;
     if (!found) {
       std::string known = "terrain";
-      for (const Key& kk : kKeys) known += std::string(", ") + kk.name;
+      for (const Key& kk : sim::kEnvironmentFields) known += std::string(", ") + kk.name;
       throw InputError(msg() << "unknown key " << at << " (known keys: " << known << ")");
     }
     const double v = number_of(node, at);

@@ -33,22 +33,6 @@ const DoubleKey kConstants[] = {
     {"eps_len", &sim::Constants::eps_len},
 };
 
-struct EnvKey {
-  const char* name;
-  double sim::Environment::*field;
-};
-const EnvKey kEnvKeys[] = {
-    {"gravity", &sim::Environment::gravity},
-    {"damping", &sim::Environment::damping},
-    {"friction", &sim::Environment::friction},
-    {"tangent_keep", &sim::Environment::tangent_keep},
-    {"belt_speed", &sim::Environment::belt_speed},
-    {"wind_amp", &sim::Environment::wind_amp},
-    {"wind_period", &sim::Environment::wind_period},
-    {"adhesion", &sim::Environment::adhesion},
-    {"adhesion_band", &sim::Environment::adhesion_band},
-};
-
 hsize_t h(size_t n) { return static_cast<hsize_t>(n); }
 
 // an integer attribute that must fit an int
@@ -138,7 +122,9 @@ sim::Scene read_scene(const std::string& path) {
     throw InputError(msg() << path << ": attribute 'name' of env is \"" << s.env.name
                            << "\", not a known environment (known: " << known << ")");
   }
-  for (const EnvKey& k : kEnvKeys) s.env.*(k.field) = env.read_double(k.name);
+  // every scalar field of sim::kEnvironmentFields; an optional one a file leaves out keeps its default
+  for (const sim::EnvironmentField& k : sim::kEnvironmentFields)
+    if (!k.optional || env.has_attribute(k.name)) s.env.*(k.field) = env.read_double(k.name);
   // the contact law (run.contact) and no_slip's retention: optional, absent in files written before them,
   // which are coulomb scenes
   if (env.has_attribute("contact")) {
@@ -146,7 +132,6 @@ sim::Scene read_scene(const std::string& path) {
     DIVCOLL_THROW_UNLESS(sim::contact_law_from_name(law, &s.env.contact),
                          path << ": attribute 'contact' of env is \"" << law << "\", not a contact law (coulomb, no_slip)");
   }
-  s.env.no_slip_keep = env.has_attribute("no_slip_keep") ? env.read_double("no_slip_keep") : 0.0;
   const size_t K = rows_of(f, "env/terrain", 3, "K");
   const std::vector<double> terrain = f.read<double>("env/terrain", Dims{h(K), 3});
   s.env.terrain.resize(K);
@@ -193,9 +178,8 @@ void write_scene_to(h5::File& f, const sim::Scene& s) {
   // environment
   const h5::Node env = f.create_group("env");
   env.write_string("name", s.env.name);
-  for (const EnvKey& k : kEnvKeys) env.write_double(k.name, s.env.*(k.field));
+  for (const sim::EnvironmentField& k : sim::kEnvironmentFields) env.write_double(k.name, s.env.*(k.field));
   env.write_string("contact", sim::contact_law_name(s.env.contact));
-  env.write_double("no_slip_keep", s.env.no_slip_keep);
   const size_t K = s.env.terrain.size();
   std::vector<double> terrain(3 * K);
   for (size_t k = 0; k < K; ++k) {

@@ -84,18 +84,10 @@ void validate_constants(const Constants& c) {
 
 // the ranges of configs/environments.toml (the same ones io/environments.cpp enforces on the tables)
 void validate_environment(const Environment& e) {
-  check_range(e.gravity, "env/gravity", -100, 0, false);
-  check_range(e.damping, "env/damping", 0, 1000, false);
-  check_range(e.friction, "env/friction", 0, 100, false);
-  check_range(e.tangent_keep, "env/tangent_keep", 0, 1, false);
-  check_range(e.belt_speed, "env/belt_speed", 0, 10, false);
-  check_range(e.wind_amp, "env/wind_amp", -100, 100, false);
-  check_range(e.wind_period, "env/wind_period", 0, 1e6, true);
-  check_range(e.adhesion, "env/adhesion", 0, 100, false);
-  check_range(e.adhesion_band, "env/adhesion_band", 0, 1, false);
+  for (const EnvironmentField& f : kEnvironmentFields)
+    check_range(e.*(f.field), (std::string("env/") + f.name).c_str(), f.lo, f.hi, f.lo_open);
   DIVCOLL_THROW_UNLESS(e.contact == ContactLaw::coulomb || e.contact == ContactLaw::no_slip,
                        "env/contact = " << static_cast<int>(e.contact) << " is not a contact law (coulomb, no_slip)");
-  check_range(e.no_slip_keep, "env/no_slip_keep", 0, 1, false);
 
   // terrain: finite, bounded heights and slopes, sorted, every segment but the first >= 0.01 u wide
   const auto& t = e.terrain;

@@ -47,21 +47,45 @@ const char* contact_law_name(ContactLaw law);
 // the law of that name; false (and *law untouched) for any other name
 bool contact_law_from_name(const std::string& name, ContactLaw* law);
 
+// every scalar field of an environment, the one table that the struct below, its validation (scene.cpp), the
+// environments file (io/environments.cpp), the scene file (io/scene_file.cpp) and `divcoll envs` read:
+//   X(name, default, lowest, highest, lowest excluded, optional in a scene file (read as the default when absent))
+// A new field is one row here (and its meaning in configs/environments.toml and src/MODEL.md).
+#define DIVCOLL_ENVIRONMENT_FIELDS(X)                                                                             \
+  X(gravity, -4.8, -100, 0, false, false)      /* u/s^2 (negative: down) */                                    \
+  X(damping, 15.0, 0, 1000, false, false)      /* 1/s, velocity decay gamma */                                 \
+  X(friction, 1.0, 0, 100, false, false)       /* Coulomb mu */                                                \
+  X(tangent_keep, 1.0, 0, 1, false, false)     /* kappa_t, extra tangential retention on contact */            \
+  X(belt_speed, 0.0, 0, 10, false, false)      /* u/s, floor moves backward at this speed */                   \
+  X(wind_amp, 0.0, -100, 100, false, false)    /* u/s^2, horizontal wind acceleration amplitude */             \
+  X(wind_period, 4.0, 0, 1e6, true, false)     /* s */                                                         \
+  X(adhesion, 0.0, 0, 100, false, false)       /* u/s^2, downward pull on masses near the surface */           \
+  X(adhesion_band, 0.01, 0, 1, false, false)   /* u, height above the surface where adhesion acts */           \
+  X(no_slip_keep, 0.0, 0, 1, false, true)      /* kappa_ns, tangential relative velocity kept under no_slip */
+
 // an environment (SPEC §3): physical constants and terrain
 struct Environment {
   std::string name = "flat";
-  double gravity = -4.8;        // u/s^2 (negative: down)
-  double damping = 15.0;        // 1/s, velocity decay gamma
-  double friction = 1.0;        // Coulomb mu
-  double tangent_keep = 1.0;    // kappa_t, extra tangential retention on contact
-  double belt_speed = 0.0;      // u/s, floor moves backward at this speed
-  double wind_amp = 0.0;        // u/s^2, horizontal wind acceleration amplitude
-  double wind_period = 4.0;     // s
-  double adhesion = 0.0;        // u/s^2, downward pull on masses near the surface
-  double adhesion_band = 0.01;  // u, height above the surface where adhesion acts
+#define DIVCOLL_ENVIRONMENT_FIELD(name, def, lo, hi, lo_open, optional) double name = def;
+  DIVCOLL_ENVIRONMENT_FIELDS(DIVCOLL_ENVIRONMENT_FIELD)
+#undef DIVCOLL_ENVIRONMENT_FIELD
   ContactLaw contact = ContactLaw::coulomb;  // the contact law (run.contact)
-  double no_slip_keep = 0.0;    // kappa_ns, tangential relative velocity kept on contact under no_slip only
   std::vector<Segment> terrain{Segment{}};  // sorted by x_start, at least one
+};
+
+// the table as data: one row per scalar field of Environment
+struct EnvironmentField {
+  const char* name;
+  double Environment::*field;
+  double lo, hi;
+  bool lo_open;   // the lowest value itself is refused
+  bool optional;  // a scene file may leave it out (read as the default)
+};
+inline constexpr EnvironmentField kEnvironmentFields[] = {
+#define DIVCOLL_ENVIRONMENT_FIELD(name, def, lo, hi, lo_open, optional) \
+  {#name, &Environment::name, lo, hi, lo_open, optional},
+    DIVCOLL_ENVIRONMENT_FIELDS(DIVCOLL_ENVIRONMENT_FIELD)
+#undef DIVCOLL_ENVIRONMENT_FIELD
 };
 
 // a scene: N masses, S springs, A agents, C connectors
