@@ -165,7 +165,7 @@ struct PlainTrainResult {
   long pair_episodes_grad = 0, pair_episodes_fwd = 0;  // the compute spent
 };
 struct PlainTrainSpec {
-  Tether tether = kWeakConnector;
+  Tether tether{};  // stiffness, amplitude and dashpot from the run config (collective::tether), always given
   bool diverse = false;
   int iterations = 0, batch_pairs = 0, episode_steps = 1000, validation_pairs = 0;  // 0 = no validation
   uint64_t seed = 1, stream = 0;
