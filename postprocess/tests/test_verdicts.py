@@ -236,5 +236,32 @@ class Extract(unittest.TestCase):
                 self.assertEqual(np.asarray(c.effect(p, None, "same_length")).shape, (1,), c.id)
 
 
+    def test_the_page_draws_the_supplement_figures_from_a_runs_arrays(self):
+        import json
+        d = tempfile.mkdtemp()
+        try:
+            runs = []
+            for s in (1, 2):
+                a = dict(self.a, seed=s)
+                for v in ("baseline", "supplement"):
+                    os.makedirs(os.path.join(d, v), exist_ok=True)
+                    with open(os.path.join(d, v, f"seed{s}.arrays.json"), "w") as fh:
+                        json.dump(a, fh)
+                    runs.append(f'[[run]]\nvariant = "{v}"\nseed = {s}\npath = "{v}/seed{s}.h5"\n'
+                                'status = "complete"\n')
+            with open(os.path.join(d, "study.toml"), "w") as fh:
+                fh.write('format = "divcoll-study"\nname = "tiny"\n' + "\n".join(runs))
+            path = verdict_page.write(d, os.path.join(d, "v"), B=500)
+            with open(path) as fh:
+                text = fh.read()
+            for fig in ("fig4", "fig_s2", "fig_s3"):
+                self.assertTrue(os.path.exists(os.path.join(d, "v", "figures", fig + ".png")), fig)
+            for c in ("C25", "C26", "C27", "C28"):
+                row = [ln for ln in text.splitlines() if ln.startswith(f"| {c} |")][0]
+                self.assertIn("too few populations", row)
+        finally:
+            shutil.rmtree(d)
+
+
 if __name__ == "__main__":
     unittest.main()
