@@ -158,7 +158,14 @@ def check(page, screenshot=None, width=1280, height=2000):
             shot = cdp.send("Page.captureScreenshot", {"format": "png"}, session=session)
             with open(screenshot, "wb") as fh:
                 fh.write(base64.b64decode(shot["data"]))
-        cdp.events += cdp.read(0.5)
+        # the page's console and network events: read until the pipe has been quiet for 0.5 s (at most 10 s), not
+        # one read, so that events still in flight on a loaded machine are not missed
+        end = time.time() + 10
+        while time.time() < end:
+            got = cdp.read(0.5)
+            cdp.events += got
+            if not got and not cdp.buf:
+                break
         for m in cdp.events:
             meth, p = m.get("method"), m.get("params", {})
             if meth == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
