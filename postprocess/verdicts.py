@@ -30,9 +30,8 @@ def main(argv=None):
         if a.readings:
             path = verdict_page.readings_page(a.study, a.out or os.path.join(a.study, "readings"), B=a.resamples)
         else:
-            path = verdict_page.write(a.study, a.out or os.path.join(a.study, "verdicts"), B=a.resamples)
-            if a.readme:
-                verdict_page.write_readme_table(a.study, a.readme, B=a.resamples)
+            path = verdict_page.write(a.study, a.out or os.path.join(a.study, "verdicts"), B=a.resamples,
+                                      readme=a.readme or "")
     except (OSError, ValueError, KeyError, tomllib.TOMLDecodeError) as e:
         print(f"verdicts: {e}", file=sys.stderr)
         return 2

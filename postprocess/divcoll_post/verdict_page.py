@@ -5,6 +5,7 @@ over populations. Every number comes from the `*.arrays.json` kept beside the st
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import tomllib
@@ -60,11 +61,22 @@ def cell(r):
     return f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {r.claim.unit} · {v}"
 
 
-def forest(results: Sequence[V.Result], path, title):
-    """every claim's estimate and interval in units of its margin: 0 and the margin(s) drawn"""
+def _pyplot():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    return plt
+
+
+def _save(plt, fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def forest(results: Sequence[V.Result], path, title):
+    """every claim's estimate and interval in units of its margin: 0 and the margin(s) drawn"""
+    plt = _pyplot()
     rs = [r for r in results if np.isfinite(r.lo)]
     if not rs:
         return False
@@ -88,9 +100,7 @@ def forest(results: Sequence[V.Result], path, title):
     ax.set_xlabel("effect / margin (band claims: (θ − centre) / half-width)\n0 solid, +margin dashed, −margin dotted; "
                   "green supported, red contradicted, grey inconclusive", fontsize=8)
     ax.set_title(title, fontsize=8, wrap=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(plt, fig, path)
     return True
 
 
@@ -103,9 +113,7 @@ def _mean_ci(pops, fn, protocol="same_length", B=4000):
 def fig2a(pops, path):
     """flat and novel travel of agents alone (two protocols) and the 8 collective types: mean over populations,
     hierarchical bootstrap 95% interval, each population a dot"""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     p0 = pops[0]
     rows = []
     for label, proto in [("alone, 3000 steps", "same_length"), ("alone, 1000 steps", "training_length")]:
@@ -137,16 +145,12 @@ def fig2a(pops, path):
         ax.set_ylabel("travel, BL")
     fig.suptitle(f"Fig. 2A over {len(pops)} populations: mean, hierarchical bootstrap 95% interval, dots = populations",
                  fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(plt, fig, path)
     return rows
 
 
 def fig3a(pops, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     rows = []
     for t in (V.WU, V.WD):
         for which in ("all", "worse", "better"):
@@ -162,17 +166,13 @@ def fig3a(pops, path):
     ax.set_xticklabels([f"{t.split('@')[0]}\n{w}" for t, w, *_ in rows], fontsize=7)
     ax.set_ylabel("mean DTW per step, u")
     ax.set_title(f"Fig. 3A over {len(pops)} populations (hierarchical bootstrap 95% interval)", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(plt, fig, path)
     return rows
 
 
 def supplement_figs(pops, out_dir):
     """Figs 4, S2, S3 over the populations with those stages; returns [(name, png, rows)]"""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     made = []
     sp = [p for p in pops if p.has("scaling")]
     if len(sp) >= 2:
@@ -192,10 +192,8 @@ def supplement_figs(pops, out_dir):
         ax.set_ylabel("travel, BL (mean of the 12 novel environments)")
         ax.legend(fontsize=7)
         ax.set_title(f"Fig. 4 over {len(sp)} populations", fontsize=8)
-        fig.tight_layout()
         png = os.path.join(out_dir, "fig4.png")
-        fig.savefig(png, dpi=120)
-        plt.close(fig)
+        _save(plt, fig, png)
         made.append(("Fig. 4", png, rows))
     sp = [p for p in pops if p.has("specialists")]
     if len(sp) >= 2:
@@ -218,10 +216,8 @@ def supplement_figs(pops, out_dir):
         ax.set_ylabel("travel, BL")
         ax.legend(fontsize=7)
         ax.set_title(f"Fig. S2 over {len(sp)} populations", fontsize=8)
-        fig.tight_layout()
         png = os.path.join(out_dir, "fig_s2.png")
-        fig.savefig(png, dpi=120)
-        plt.close(fig)
+        _save(plt, fig, png)
         made.append(("Fig. S2", png, [(f"{e}: generalist", *r[1:4]) for e, *r in [(r[0], *r[1:]) for r in rows]]
                      + [(f"{r[0]}: best specialist", *r[4:7]) for r in rows]))
     sp = [p for p in pops if p.has("graded")]
@@ -243,10 +239,8 @@ def supplement_figs(pops, out_dir):
         ax.set_xticklabels([r[0] for r in rows], fontsize=7)
         ax.set_ylabel("pairs − agents alone, BL (novel mean)")
         ax.set_title(f"Fig. S3 over {len(sp)} populations", fontsize=8)
-        fig.tight_layout()
         png = os.path.join(out_dir, "fig_s3.png")
-        fig.savefig(png, dpi=120)
-        plt.close(fig)
+        _save(plt, fig, png)
         made.append(("Fig. S3", png, rows))
     return made
 
@@ -298,16 +292,38 @@ def check_paper_seeds(B):
     return lines
 
 
-def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
-    os.makedirs(out, exist_ok=True)
+@dataclasses.dataclass
+class Judged:
+    """a verdicts study judged once: its manifest, its main-text and supplement populations, every claim's result"""
+    man: dict
+    main: List[V.Population]
+    supp: List[V.Population]
+    res: List[V.Result]
+
+    @property
+    def planned(self) -> List[int]:
+        return sorted({r["seed"] for r in self.man["run"]})
+
+
+def judge_study(folder: str, B: int = V.B_DEFAULT) -> Judged:
     with open(os.path.join(folder, "study.toml"), "rb") as fh:
         man = tomllib.load(fh)
     main = V.load_study(folder, MAIN_VARIANTS)
-    supp = [p for p in V.load_study(folder, SUPPLEMENT_VARIANTS) if any(p.has(s) for s in ("specialists", "scaling",
-                                                                                         "graded"))]
+    supp = [p for p in V.load_study(folder, SUPPLEMENT_VARIANTS)
+            if any(p.has(s) for s in ("specialists", "scaling", "graded"))]
     if not main:
         raise ValueError(f"{folder}: no run with kept arrays (`*.arrays.json`; `divcoll report {folder}` writes them)")
-    res = judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
+    return Judged(man, main, supp, judge_family(main, "M", B=B) + judge_family(supp, "S", B=B))
+
+
+def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "") -> str:
+    """the page DIR/verdicts.md with its figures; with readme, also that README's results table (readme_lines),
+    from the same judging"""
+    os.makedirs(out, exist_ok=True)
+    j = judge_study(folder, B)
+    man, main, supp, res = j.man, j.main, j.supp, j.res
+    if readme:
+        write_readme_table(readme, readme_lines(j))
     alone_claims = [c for c in V.CLAIMS if c.reads_alone]
     readings = {}
     for proto, _ in READINGS:
@@ -316,7 +332,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT) -> str:
     commits, here = provenance(folder, main + supp)
     seeds_m = ", ".join(str(p.seed) for p in main)
     seeds_s = ", ".join(str(p.seed) for p in supp) or "none yet"
-    planned = sorted({r["seed"] for r in man["run"]})
+    planned = j.planned
     lines = ["# The paper's claims, judged", "",
              f"Study `{man['name']}` ([configs/studies/verdicts.toml](../../../configs/studies/verdicts.toml)), judged by "
              "the pre-registered protocol [configs/studies/verdicts_protocol.md]"
@@ -441,13 +457,8 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
                 point, th = V.bootstrap(pairs, paired_effect(c.effect), B=B)
             except (KeyError, ValueError, IndexError):
                 continue
-            from scipy.stats import t as tdist
-            n = len(pairs)
-            q25, q75 = np.quantile(th, [0.25, 0.75])
-            se = float((q75 - q25) / 1.349 * np.sqrt(n / (n - 1)))
-            q = tdist.ppf(0.975, n - 1)
-            m = float(np.mean(point))
-            diffs[(v, c.id)] = (m, m - q * se, m + q * se)
+            m, _, lo, hi = V.interval(point, th)
+            diffs[(v, c.id)] = (m, lo, hi)
     cols = [v for v in names if v in res]
     lines = ["# The paper's claims under each reading", "",
              f"Study `{man['name']}` ([configs/studies/{man['name']}.toml](../../../configs/studies/{man['name']}.toml)), "
@@ -486,14 +497,10 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
 README_BEGIN, README_END = "<!-- verdict table -->", "<!-- /verdict table -->"
 
 
-def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
-    """the README's results: one row per claim (effect, interval, verdict) from a kept verdicts study"""
-    main = V.load_study(folder, MAIN_VARIANTS)
-    supp = [p for p in V.load_study(folder, SUPPLEMENT_VARIANTS)
-            if any(p.has(s) for s in ("specialists", "scaling", "graded"))]
-    res = judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
-    with open(os.path.join(folder, "study.toml"), "rb") as fh:
-        planned = len({r["seed"] for r in tomllib.load(fh)["run"]})
+def readme_lines(j: Judged) -> List[str]:
+    """the README's results: one row per claim (effect, interval, verdict)"""
+    planned = len(j.planned)
+    main, supp, res = j.main, j.supp, j.res
     lines = [f"Main text: {len(main)} of {planned} populations; supplement and Fig. 4: {len(supp)} of 5"
              + (" (interim: the study is still running, and verdicts can move as populations arrive)."
                 if len(main) < planned or len(supp) < 5 else "."), "",
@@ -511,13 +518,18 @@ def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
     return lines
 
 
-def write_readme_table(folder: str, readme: str, B: int = V.B_DEFAULT) -> None:
-    """replaces the README's block between the verdict-table markers with readme_table(folder)"""
+def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
+    """readme_lines of a kept verdicts study"""
+    return readme_lines(judge_study(folder, B))
+
+
+def write_readme_table(readme: str, lines: List[str]) -> None:
+    """replaces the README's block between the verdict-table markers with `lines`"""
     with open(readme) as fh:
         s = fh.read()
     if README_BEGIN not in s or README_END not in s:
         raise ValueError(f"{readme} has no block between {README_BEGIN} and {README_END}")
     a, b = s.index(README_BEGIN) + len(README_BEGIN), s.index(README_END)
-    s = s[:a] + "\n" + "\n".join(readme_table(folder, B)) + "\n" + s[b:]
+    s = s[:a] + "\n" + "\n".join(lines) + "\n" + s[b:]
     with open(readme, "w") as fh:
         fh.write(s)

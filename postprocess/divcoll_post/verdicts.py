@@ -630,6 +630,25 @@ def bootstrap(pops: Sequence[Population], fn, protocol="same_length", B=B_DEFAUL
     return point, theta.mean(axis=1)
 
 
+def _t975(n):
+    from scipy.stats import t as tdist
+    return float(tdist.ppf(0.975, n - 1))
+
+
+def interval(point, th):
+    """(estimate, standard error, 95% low, high) of the mean of the per-population effects `point` from the
+    bootstrap's resampled means `th`: the spread of the resamples as their interquartile range / 1.349 (the
+    normal's sd, so that the rare resamples where a ratio's denominator nears 0 do not set it; amendment A4),
+    corrected for the bootstrap's (n − 1)/n shrinkage of a mean's variance, with Student t quantiles on n − 1
+    degrees of freedom (protocol §3, amendment A2)"""
+    n = len(point)
+    est = float(np.mean(point))
+    q25, q75 = np.quantile(th, [0.25, 0.75])
+    se = float((q75 - q25) / 1.349 * math.sqrt(n / (n - 1)))
+    q = _t975(n)
+    return est, se, est - q * se, est + q * se
+
+
 def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_length", B=B_DEFAULT,
           seed=BOOT_SEED, alpha=ALPHA) -> List[Result]:
     """every claim of one family over the populations that have its stages; Holm over the family's hypotheses"""
@@ -654,19 +673,10 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
             r.reason = f"the runs lack {e}"
             results.append(r)
             continue
-        from scipy.stats import t as tdist
         n = len(ps)
         r.per_population = {p.seed: float(v) for p, v in zip(ps, point)}
-        r.estimate = float(np.mean(point))
-        # the hierarchical bootstrap's standard error, corrected for the bootstrap's (n − 1)/n shrinkage of a mean's
-        # variance, with Student t quantiles on n − 1 degrees of freedom (protocol §3, amendment A2)
-        # (amendment A4: the spread of the resamples as their interquartile range / 1.349, the normal's sd, so that
-        # the rare resamples where a ratio's denominator nears 0 do not set it)
-        q25, q75 = np.quantile(th, [0.25, 0.75])
-        r.se = float((q75 - q25) / 1.349 * math.sqrt(n / (n - 1)))
-        q = tdist.ppf(0.975, n - 1)
-        r.lo, r.hi = r.estimate - q * r.se, r.estimate + q * r.se
-        half = q * np.std(point, ddof=1) / math.sqrt(n)
+        r.estimate, r.se, r.lo, r.hi = interval(point, th)
+        half = _t975(n) * np.std(point, ddof=1) / math.sqrt(n)
         r.t_lo, r.t_hi = r.estimate - half, r.estimate + half
         r.p_support, r.p_contra = hypotheses(c.form, c.margin, c.band, r.estimate, r.se, n - 1)
         results.append(r)
