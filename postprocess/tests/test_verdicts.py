@@ -52,6 +52,21 @@ def synthetic(seed, rng, R=3, alone_flat=15.0, beat=-5.0, wdd_bonus=2.0, worse_d
             "analysis": {"novel_environments": ENVS[1:], "dtw": dtw, "familiarity": fam}}
 
 
+def kept_study(d, arrays):
+    """a study folder as `divcoll report --keep` leaves it, in d: arrays = {variant: {seed: a run's arrays}}"""
+    import json
+    runs = []
+    for v, by_seed in arrays.items():
+        os.makedirs(os.path.join(d, v), exist_ok=True)
+        for seed, a in by_seed.items():
+            with open(os.path.join(d, v, f"seed{seed}.arrays.json"), "w") as fh:
+                json.dump(a, fh)
+            runs.append(f'[[run]]\nvariant = "{v}"\nseed = {seed}\npath = "{v}/seed{seed}.h5"\nstatus = "complete"\n')
+    with open(os.path.join(d, "study.toml"), "w") as fh:
+        fh.write('format = "divcoll-study"\nname = "synthetic"\n'
+                 + "".join(f'[[variant]]\nname = "{v}"\n' for v in arrays) + "\n".join(runs))
+
+
 def populations(n, **kw):
     rng = np.random.Generator(np.random.PCG64(7))
     return [V.Population(s, [synthetic(s, rng, **kw)]) for s in range(1, n + 1)]
@@ -119,16 +134,7 @@ class Page(unittest.TestCase):
         d = tempfile.mkdtemp()
         try:
             rng = np.random.Generator(np.random.PCG64(3))
-            import json
-            runs = []
-            for s in (1, 2, 3, 4):
-                os.makedirs(os.path.join(d, "baseline"), exist_ok=True)
-                with open(os.path.join(d, "baseline", f"seed{s}.arrays.json"), "w") as fh:
-                    json.dump(synthetic(s, rng), fh)
-                runs.append(f'[[run]]\nvariant = "baseline"\nseed = {s}\npath = "baseline/seed{s}.h5"\n'
-                            'status = "complete"\n')
-            with open(os.path.join(d, "study.toml"), "w") as fh:
-                fh.write('format = "divcoll-study"\nname = "synthetic"\n' + "\n".join(runs))
+            kept_study(d, {"baseline": {s: synthetic(s, rng) for s in (1, 2, 3, 4)}})
             path = verdict_page.write(d, os.path.join(d, "verdicts"), B=2000)
             with open(path) as fh:
                 text = fh.read()
@@ -144,18 +150,11 @@ class Page(unittest.TestCase):
     def test_the_readings_page_pairs_each_reading_with_its_baseline(self):
         d = tempfile.mkdtemp()
         try:
-            import json
-            runs = []
+            arrays = {}
             for v, bonus in (("baseline", 2.0), ("shifted", 3.0)):
                 rng = np.random.Generator(np.random.PCG64(5))  # the same populations but for the bonus
-                os.makedirs(os.path.join(d, v), exist_ok=True)
-                for s in (1, 2, 3, 4):
-                    with open(os.path.join(d, v, f"seed{s}.arrays.json"), "w") as fh:
-                        json.dump(synthetic(s, rng, wdd_bonus=bonus), fh)
-                    runs.append(f'[[run]]\nvariant = "{v}"\nseed = {s}\npath = "{v}/seed{s}.h5"\nstatus = "complete"\n')
-            with open(os.path.join(d, "study.toml"), "w") as fh:
-                fh.write('format = "divcoll-study"\nname = "synthetic"\n[[variant]]\nname = "baseline"\n'
-                         '[[variant]]\nname = "shifted"\n' + "\n".join(runs))
+                arrays[v] = {s: synthetic(s, rng, wdd_bonus=bonus) for s in (1, 2, 3, 4)}
+            kept_study(d, arrays)
             path = verdict_page.readings_page(d, os.path.join(d, "readings"), B=2000)
             with open(path) as fh:
                 row = [ln for ln in fh if ln.startswith("| C09 |")][0]
@@ -235,22 +234,10 @@ class Extract(unittest.TestCase):
             if c.family == "M" and c.id != "C24":  # the tiny preset has no wind
                 self.assertEqual(np.asarray(c.effect(p, None, "same_length")).shape, (1,), c.id)
 
-
     def test_the_page_draws_the_supplement_figures_from_a_runs_arrays(self):
-        import json
         d = tempfile.mkdtemp()
         try:
-            runs = []
-            for s in (1, 2):
-                a = dict(self.a, seed=s)
-                for v in ("baseline", "supplement"):
-                    os.makedirs(os.path.join(d, v), exist_ok=True)
-                    with open(os.path.join(d, v, f"seed{s}.arrays.json"), "w") as fh:
-                        json.dump(a, fh)
-                    runs.append(f'[[run]]\nvariant = "{v}"\nseed = {s}\npath = "{v}/seed{s}.h5"\n'
-                                'status = "complete"\n')
-            with open(os.path.join(d, "study.toml"), "w") as fh:
-                fh.write('format = "divcoll-study"\nname = "tiny"\n' + "\n".join(runs))
+            kept_study(d, {v: {s: dict(self.a, seed=s) for s in (1, 2)} for v in ("baseline", "supplement")})
             path = verdict_page.write(d, os.path.join(d, "v"), B=500)
             with open(path) as fh:
                 text = fh.read()
