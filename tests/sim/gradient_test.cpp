@@ -151,22 +151,26 @@ TEST(Gradient, ConnectorDashpotsMatchCentralDifferences) {
   }
 }
 
-// a body dropped from above: the landing goes through the time of impact, and the gradient with respect
-// to the drop height (x0.y) matches finite differences
-TEST(Gradient, LandingThroughTimeOfImpact) {
-  sim::Scene s = collective::agent_scene(testing::gradient_pair().p, "flat");
+// the scene `s` dropped 0.05 u: the landing goes through the time of impact, and the gradient with respect to
+// the start positions (the drop height among them) matches finite differences
+void check_landing(sim::Scene s, const std::string& label) {
   for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 0.05;
   sim::RunOptions opt;
   opt.steps = kSteps;
   opt.grad = true;
   const sim::RunResult r = sim::simulate(s, opt);
-  ASSERT_EQ(r.status, sim::Status::ok);
-  EXPECT_GT(r.contacts.toi, 0);
+  ASSERT_EQ(r.status, sim::Status::ok) << label;
+  EXPECT_GT(r.contacts.toi, 0) << label;
   const std::vector<double> d = direction(s.x0.size(), 9);
   const Differences n = fd(s, d, 1e-7, [](sim::Scene& sc, const std::vector<double>& dd, double e) {
     for (size_t i = 0; i < sc.x0.size(); ++i) sc.x0[i] += e * dd[i];
   });
-  EXPECT_TRUE(agrees(dot(r.grad_x0, d), n));
+  EXPECT_TRUE(agrees(dot(r.grad_x0, d), n)) << label;
+}
+
+// a body dropped from above lands through the time of impact
+TEST(Gradient, LandingThroughTimeOfImpact) {
+  check_landing(collective::agent_scene(testing::gradient_pair().p, "flat"), "coulomb");
 }
 
 // ---- the no_slip contact law (run.contact = "no_slip", src/MODEL.md "Contact laws") ----------------------
@@ -230,21 +234,9 @@ INSTANTIATE_TEST_SUITE_P(Environments, NoSlipGradient,
 // a body dropped from above lands under no_slip (kappa_ns = 0 and 0.5): the gradient w.r.t. x0 through the
 // time of impact matches finite differences
 TEST(NoSlipGradient, LandingThroughTimeOfImpact) {
-  for (double keep : {0.0, 0.5}) {
-    sim::Scene s = no_slip(collective::agent_scene(testing::gradient_pair().p, "flat"), keep);
-    for (int i = 0; i < s.n_masses(); ++i) s.x0[2 * i + 1] += 0.05;
-    sim::RunOptions opt;
-    opt.steps = kSteps;
-    opt.grad = true;
-    const sim::RunResult r = sim::simulate(s, opt);
-    ASSERT_EQ(r.status, sim::Status::ok);
-    EXPECT_GT(r.contacts.toi, 0);
-    const std::vector<double> d = direction(s.x0.size(), 9);
-    const Differences n = fd(s, d, 1e-7, [](sim::Scene& sc, const std::vector<double>& dd, double e) {
-      for (size_t i = 0; i < sc.x0.size(); ++i) sc.x0[i] += e * dd[i];
-    });
-    EXPECT_TRUE(agrees(dot(r.grad_x0, d), n)) << "kappa_ns " << keep;
-  }
+  for (double keep : {0.0, 0.5})
+    check_landing(no_slip(collective::agent_scene(testing::gradient_pair().p, "flat"), keep),
+                  "kappa_ns " + std::to_string(keep));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <tuple>
 
 #include "collective/builders.hpp"
 #include "morph/body.hpp"
@@ -136,16 +137,34 @@ TEST(StageAdjoint, FreeVelocityMatchesCentralDifferences) {
   expect_gradient("x", zero, s.x, 1e-9, 1e-8, L);
 }
 
-TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
-  StageState s = make_state(3);
-  // terrain: a slope (so that n and the belt have two components), then a step up at x = 1 (a wall)
-  s.scene.env.terrain = {sim::Segment{-1.0, -0.1, 0.1}, sim::Segment{1.0, 0.3, 0.0}};
+// the contact stage under `law` on masses 0..4 placed on purpose, the rest free above the ground. Terrain: a slope
+// (so that n and the belt have two components), then a step up at x = 1 (a wall). Filled in place: the model
+// points into the scene
+struct ContactCase {
+  StageState s;
   sim::Model m;
-  m.compile(s.scene, 1);
-  ASSERT_TRUE(m.has_walls && m.has_belt);
-  const double h = m.h;
+  Vec wx, wv;                            // L = wx·x'' + wv·v''
+  std::vector<sim::ContactRecord> rec;  // the records of the forward pass
+  Vec xn, vn;                            // x'', v''
+};
+
+std::pair<Vec, Vec> contact_run(ContactCase& c, sim::ContactRecord* r) {
+  Vec xn(c.s.x.size()), vn(c.s.x.size());
+  std::vector<uint8_t> tn(c.s.scene.n_masses());
+  sim::contact_forward(c.m, c.s.x.data(), c.s.v.data(), xn.data(), vn.data(), tn.data(), r);
+  return {xn, vn};
+}
+
+void setup_contact_case(ContactCase& c, sim::ContactLaw law, double keep) {
+  c.s = make_state(3);
+  c.s.scene.env.terrain = {sim::Segment{-1.0, -0.1, 0.1}, sim::Segment{1.0, 0.3, 0.0}};
+  if (law == sim::ContactLaw::no_slip) {
+    c.s.scene.env.contact = law;
+    c.s.scene.env.no_slip_keep = keep;
+  }
+  c.m.compile(c.s.scene, 1);
+  StageState& s = c.s;
   auto floor_y = [](double x) { return -0.1 + 0.1 * (x + 1.0); };
-  // masses 0..4 placed on purpose, the rest free above the ground
   const int N = s.scene.n_masses();
   for (int i = 0; i < N; ++i) s.x[2 * i] = -0.5 + 0.05 * i, s.x[2 * i + 1] = floor_y(s.x[2 * i]) + 0.2;
   auto place = [&](int i, double px, double above, double vx, double vy) {
@@ -156,23 +175,32 @@ TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
   };
   place(0, 0.2, 0.001, 1.5, -0.5);    // floor, time of impact inside the step, sliding
   place(1, 0.4, -0.0005, 0.8, -0.3);  // floor, already below (no time of impact), sliding
-  place(2, 0.6, 0.0005, 0.05, -1.0);  // floor, time of impact, sticking (friction projection off)
+  place(2, 0.6, 0.0005, 0.05, -1.0);  // floor, time of impact, slow tangentially (sticking under coulomb)
   place(3, 0.995, 0.05, 2.0, 0.1);    // wall of the step at x = 1
   place(4, 0.1, 0.001, 0.3, 0.5);     // above the floor, moving up: free
-  Vec& vp = s.v;                       // the stage's input velocity v'
-  const Vec wx = random_weights(s.x.size(), 31), wv = random_weights(s.x.size(), 32);
-  std::vector<sim::ContactRecord> rec(N);
-  auto run = [&](sim::ContactRecord* r) {
-    Vec xn(s.x.size()), vn(s.x.size());
-    std::vector<uint8_t> tn(N);
-    sim::contact_forward(m, s.x.data(), vp.data(), xn.data(), vn.data(), tn.data(), r);
-    return std::make_pair(xn, vn);
-  };
+  c.wx = random_weights(s.x.size(), 31);
+  c.wv = random_weights(s.x.size(), 32);
+  c.rec.assign(N, sim::ContactRecord{});
+  std::tie(c.xn, c.vn) = contact_run(c, c.rec.data());
+}
+
+// the adjoint of the stage (the stage's input velocity v' is s.v) against central differences of L
+void expect_contact_adjoint(ContactCase& c) {
   auto L = [&] {
-    auto [xn, vn] = run(nullptr);
-    return dot(wx, xn) + dot(wv, vn);
+    auto [xn, vn] = contact_run(c, nullptr);
+    return dot(c.wx, xn) + dot(c.wv, vn);
   };
-  const auto [xn, vn] = run(rec.data());
+  Vec vpb(c.s.x.size(), 0.0), xb(c.s.x.size(), 0.0);
+  sim::contact_adjoint(c.m, c.s.v.data(), c.vn.data(), c.rec.data(), c.wx.data(), c.wv.data(), vpb.data(), xb.data());
+  expect_gradient("x", xb, c.s.x, 1e-8, 1e-6, L);
+  expect_gradient("v'", vpb, c.s.v, 1e-8, 1e-6, L);
+}
+
+TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
+  ContactCase c;
+  setup_contact_case(c, sim::ContactLaw::coulomb, 0.0);
+  ASSERT_TRUE(c.m.has_walls && c.m.has_belt);
+  const std::vector<sim::ContactRecord>& rec = c.rec;
   // the branches asked for
   EXPECT_EQ(rec[0].kind, 1);
   EXPECT_TRUE(rec[0].toi_active && rec[0].friction_active);
@@ -184,11 +212,8 @@ TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
   EXPECT_TRUE(rec[3].toi_active);
   EXPECT_EQ(rec[4].kind, 0);
   EXPECT_NE(rec[0].b[0], 0.0) << "the belt moves the floor";
-  EXPECT_LT(rec[0].tstar, h);
-  Vec vpb(s.x.size(), 0.0), xb(s.x.size(), 0.0);
-  sim::contact_adjoint(m, vp.data(), vn.data(), rec.data(), wx.data(), wv.data(), vpb.data(), xb.data());
-  expect_gradient("x", xb, s.x, 1e-8, 1e-6, L);
-  expect_gradient("v'", vpb, vp, 1e-8, 1e-6, L);
+  EXPECT_LT(rec[0].tstar, c.m.h);
+  expect_contact_adjoint(c);
 }
 
 // the same placements under the no_slip law (src/MODEL.md "Contact laws"): v'' = b + kappa_ns v_t, with
@@ -196,40 +221,9 @@ TEST(StageAdjoint, ContactMatchesCentralDifferencesOnEveryBranch) {
 TEST(StageAdjoint, NoSlipContactMatchesCentralDifferencesOnEveryBranch) {
   for (double keep : {0.0, 0.4}) {
     SCOPED_TRACE(keep);
-    StageState s = make_state(3);
-    s.scene.env.terrain = {sim::Segment{-1.0, -0.1, 0.1}, sim::Segment{1.0, 0.3, 0.0}};
-    s.scene.env.contact = sim::ContactLaw::no_slip;
-    s.scene.env.no_slip_keep = keep;
-    sim::Model m;
-    m.compile(s.scene, 1);
-    auto floor_y = [](double x) { return -0.1 + 0.1 * (x + 1.0); };
-    const int N = s.scene.n_masses();
-    for (int i = 0; i < N; ++i) s.x[2 * i] = -0.5 + 0.05 * i, s.x[2 * i + 1] = floor_y(s.x[2 * i]) + 0.2;
-    auto place = [&](int i, double px, double above, double vx, double vy) {
-      s.x[2 * i] = px;
-      s.x[2 * i + 1] = floor_y(px) + above;
-      s.v[2 * i] = vx;
-      s.v[2 * i + 1] = vy;
-    };
-    place(0, 0.2, 0.001, 1.5, -0.5);    // floor, time of impact inside the step
-    place(1, 0.4, -0.0005, 0.8, -0.3);  // floor, already below (no time of impact)
-    place(2, 0.6, 0.0005, 0.05, -1.0);  // floor, time of impact, slow tangentially
-    place(3, 0.995, 0.05, 2.0, 0.1);    // wall of the step at x = 1
-    place(4, 0.1, 0.001, 0.3, 0.5);     // above the floor, moving up: free
-    Vec& vp = s.v;
-    const Vec wx = random_weights(s.x.size(), 31), wv = random_weights(s.x.size(), 32);
-    std::vector<sim::ContactRecord> rec(N);
-    auto run = [&](sim::ContactRecord* r) {
-      Vec xn(s.x.size()), vn(s.x.size());
-      std::vector<uint8_t> tn(N);
-      sim::contact_forward(m, s.x.data(), vp.data(), xn.data(), vn.data(), tn.data(), r);
-      return std::make_pair(xn, vn);
-    };
-    auto L = [&] {
-      auto [xn, vn] = run(nullptr);
-      return dot(wx, xn) + dot(wv, vn);
-    };
-    const auto [xn, vn] = run(rec.data());
+    ContactCase c;
+    setup_contact_case(c, sim::ContactLaw::no_slip, keep);
+    const std::vector<sim::ContactRecord>& rec = c.rec;
     for (int i : {0, 2}) {
       EXPECT_EQ(rec[i].kind, 1);
       EXPECT_TRUE(rec[i].toi_active);
@@ -241,18 +235,16 @@ TEST(StageAdjoint, NoSlipContactMatchesCentralDifferencesOnEveryBranch) {
     EXPECT_TRUE(rec[3].toi_active);
     EXPECT_EQ(rec[4].kind, 0);
     // v'' − b has no normal part, and its tangential part is kappa_ns times v_t
+    const Vec& vp = c.s.v;
     for (int i : {0, 1, 2, 3}) {
       const sim::ContactRecord& r = rec[i];
       const double rx = vp[2 * i] - r.b[0], ry = vp[2 * i + 1] - r.b[1];
       const double vnrm = rx * r.n[0] + ry * r.n[1];
-      const double ux = vn[2 * i] - r.b[0], uy = vn[2 * i + 1] - r.b[1];
+      const double ux = c.vn[2 * i] - r.b[0], uy = c.vn[2 * i + 1] - r.b[1];
       EXPECT_NEAR(ux, keep * (rx - vnrm * r.n[0]), 1e-15) << i;
       EXPECT_NEAR(uy, keep * (ry - vnrm * r.n[1]), 1e-15) << i;
     }
-    Vec vpb(s.x.size(), 0.0), xb(s.x.size(), 0.0);
-    sim::contact_adjoint(m, vp.data(), vn.data(), rec.data(), wx.data(), wv.data(), vpb.data(), xb.data());
-    expect_gradient("x", xb, s.x, 1e-8, 1e-6, L);
-    expect_gradient("v'", vpb, vp, 1e-8, 1e-6, L);
+    expect_contact_adjoint(c);
   }
 }
 
