@@ -83,6 +83,20 @@ std::string text_of(const toml::node& n, const std::string& what) {
   return n.as_string()->get();
 }
 
+// a non-empty list of distinct seeds (integers >= 0); `must` ends the message for any other value
+std::vector<std::uint64_t> seed_list(const toml::node& n, const std::string& what, const std::string& must) {
+  const toml::array* a = n.as_array();
+  DIVCOLL_THROW_UNLESS(a && !a->empty(), what << " must be " << must);
+  std::vector<std::uint64_t> out;
+  for (const toml::node& e : *a) {
+    DIVCOLL_THROW_UNLESS(e.is_integer() && e.as_integer()->get() >= 0, what << " must be " << must);
+    const auto v = static_cast<std::uint64_t>(e.as_integer()->get());
+    DIVCOLL_THROW_UNLESS(std::find(out.begin(), out.end(), v) == out.end(), what << " lists " << v << " twice");
+    out.push_back(v);
+  }
+  return out;
+}
+
 // parses and checks the study file (not yet the configs)
 Study parse_study(const std::string& path) {
   Study s;
@@ -113,14 +127,7 @@ Study parse_study(const std::string& path) {
   DIVCOLL_THROW_UNLESS(fs::is_regular_file(s.base), "study.base: no config file " << s.base);
   s.base_given = s.base;
   if (st->contains("scale")) s.scale = strings(*st->get("scale"), "study.scale");
-  const toml::array* seeds = st->get("seeds")->as_array();
-  DIVCOLL_THROW_UNLESS(seeds && !seeds->empty(), "study.seeds must be a non-empty list of integers >= 0");
-  for (const toml::node& e : *seeds) {
-    DIVCOLL_THROW_UNLESS(e.is_integer() && e.as_integer()->get() >= 0, "study.seeds must be a non-empty list of integers >= 0");
-    const auto v = static_cast<std::uint64_t>(e.as_integer()->get());
-    DIVCOLL_THROW_UNLESS(std::find(s.seeds.begin(), s.seeds.end(), v) == s.seeds.end(), "study.seeds lists " << v << " twice");
-    s.seeds.push_back(v);
-  }
+  s.seeds = seed_list(*st->get("seeds"), "study.seeds", "a non-empty list of integers >= 0");
   const toml::array* vars = root["variant"].as_array();
   DIVCOLL_THROW_UNLESS(vars && !vars->empty(), path << " has no [[variant]] table (give at least one)");
   const std::regex ok_name("[A-Za-z0-9_-]+");
@@ -133,18 +140,8 @@ Study parse_study(const std::string& path) {
       if (key == "name") v.name = text_of(val, "variant.name");
       else if (key == "doc") v.doc = text_of(val, "variant.doc");
       else if (key == "set") v.set = strings(val, "variant.set");
-      else if (key == "seeds") {
-        const toml::array* a = val.as_array();
-        DIVCOLL_THROW_UNLESS(a && !a->empty(), "variant.seeds must be a non-empty list of the study's seeds");
-        for (const toml::node& e : *a) {
-          DIVCOLL_THROW_UNLESS(e.is_integer() && e.as_integer()->get() >= 0,
-                               "variant.seeds must be a non-empty list of the study's seeds");
-          const auto sd = static_cast<std::uint64_t>(e.as_integer()->get());
-          DIVCOLL_THROW_UNLESS(std::find(v.seeds.begin(), v.seeds.end(), sd) == v.seeds.end(),
-                               "variant.seeds lists " << sd << " twice");
-          v.seeds.push_back(sd);
-        }
-      } else throw InputError(msg() << "unknown key variant." << key << " in " << path << " (known: name, set, seeds, doc)");
+      else if (key == "seeds") v.seeds = seed_list(val, "variant.seeds", "a non-empty list of the study's seeds");
+      else throw InputError(msg() << "unknown key variant." << key << " in " << path << " (known: name, set, seeds, doc)");
     }
     DIVCOLL_THROW_UNLESS(std::regex_match(v.name, ok_name),
                          "variant name '" << v.name << "' must be letters, digits, _ or - (it names a folder)");
@@ -231,17 +228,17 @@ struct RunState {
 
 // the manifest DIR/study.toml
 toml::table manifest(const Study& s, const std::vector<PlannedRun>& runs, const std::vector<RunState>& st) {
-  toml::array seeds, vars, list;
-  for (auto v : s.seeds) seeds.push_back(static_cast<int64_t>(v));
+  auto ints = [](const std::vector<std::uint64_t>& xs) {
+    toml::array a;
+    for (auto x : xs) a.push_back(static_cast<int64_t>(x));
+    return a;
+  };
+  toml::array seeds = ints(s.seeds), vars, list;
   for (const Variant& v : s.variants) {
     toml::array set;
     for (const auto& o : v.set) set.push_back(o);
     toml::table vt{{"name", v.name}, {"doc", v.doc}, {"set", set}};
-    if (!v.seeds.empty()) {
-      toml::array vs;
-      for (auto sd : v.seeds) vs.push_back(static_cast<int64_t>(sd));
-      vt.insert("seeds", vs);
-    }
+    if (!v.seeds.empty()) vt.insert("seeds", ints(v.seeds));
     vars.push_back(std::move(vt));
   }
   for (size_t i = 0; i < runs.size(); ++i) {
