@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "collective/builders.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/h5.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::mpi {
 

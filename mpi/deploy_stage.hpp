@@ -20,9 +20,9 @@
 
 #include <functional>
 
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/h5.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::mpi {
 

@@ -23,9 +23,9 @@
 #include <map>
 #include <string>
 
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/h5.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 #include "mpi/plan.hpp"
 
 namespace divcoll::mpi {
@@ -80,7 +80,7 @@ class RecordQueue {
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);
 
 // ---- the stages ----------------------------------------------------------------------------------------
-// every stage's runner, declared from the one stage list (io/pipeline.hpp DIVCOLL_STAGES) and defined beside
+// every stage's runner, declared from the one stage list (config/pipeline.hpp DIVCOLL_STAGES) and defined beside
 // the stage's plans: run_<name>_stage reads the stage's inputs from the run file, builds its plans and
 // drive()s them (every rank calls it)
 using StageRunner = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);

@@ -6,7 +6,7 @@
 #include "common/version.hpp"
 #include "cli/commands.hpp"
 #include "common/check.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "mpi/bench_farm.hpp"
 #include "mpi/run_cmd.hpp"
 #include "mpi/study_cmd.hpp"

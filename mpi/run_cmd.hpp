@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "io/config.hpp"
+#include "config/config.hpp"
 
 namespace divcoll::mpi {
 

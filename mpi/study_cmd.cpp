@@ -22,7 +22,7 @@
 #include <unistd.h>
 
 #include "common/check.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/file_lock.hpp"
 #include "io/h5.hpp"
 #include "mpi/agree.hpp"

@@ -109,7 +109,7 @@ class Population:
         return x.max(axis=1) - x.min(axis=1)
 
 
-# the pipeline's stages in order (src/io/pipeline.hpp's stage list): every stage group a run file can hold
+# the pipeline's stages in order (src/config/pipeline.hpp's stage list): every stage group a run file can hold
 STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
 
 

@@ -16,7 +16,7 @@
 #include "cli/commands.hpp"
 #include "collective/builders.hpp"
 #include "collective/deploy_variants.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 #include "morph/body.hpp"
 #include "nn/mlp.hpp"
 #include "sim/engine.hpp"

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "collective/builders.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 
 namespace divcoll::cli {
 

@@ -14,10 +14,10 @@
 #include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/h5.hpp"
 #include "morph/body.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 #include "io/run_read.hpp"
 
 namespace divcoll::cli {

@@ -5,7 +5,7 @@
 #include <numeric>
 
 #include "common/check.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
 

@@ -4,7 +4,7 @@
 
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
-#include "io/pipeline.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::collective {
 

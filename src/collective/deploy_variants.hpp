@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "collective/builders.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "sim/engine.hpp"
 
 namespace divcoll::collective {

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "common/check.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "io/h5.hpp"
 
 namespace divcoll::io {

@@ -82,7 +82,7 @@ void validate_constants(const Constants& c) {
                        "eps_len = " << c.eps_len << " u must be positive and finite");
 }
 
-// the ranges of configs/environments.toml (the same ones io/environments.cpp enforces on the tables)
+// the ranges of configs/environments.toml (the same ones config/environments.cpp enforces on the tables)
 void validate_environment(const Environment& e) {
   for (const EnvironmentField& f : kEnvironmentFields)
     check_range(e.*(f.field), (std::string("env/") + f.name).c_str(), f.lo, f.hi, f.lo_open);

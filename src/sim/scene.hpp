@@ -48,7 +48,7 @@ const char* contact_law_name(ContactLaw law);
 bool contact_law_from_name(const std::string& name, ContactLaw* law);
 
 // every scalar field of an environment, the one table that the struct below, its validation (scene.cpp), the
-// environments file (io/environments.cpp), the scene file (io/scene_file.cpp) and `divcoll envs` read:
+// environments file (config/environments.cpp), the scene file (io/scene_file.cpp) and `divcoll envs` read:
 //   X(name, default, lowest, highest, lowest excluded, optional in a scene file (read as the default when absent))
 // A new field is one row here (and its meaning in configs/environments.toml and src/MODEL.md).
 #define DIVCOLL_ENVIRONMENT_FIELDS(X)                                                                             \

@@ -13,7 +13,7 @@
 #include <unistd.h>
 
 #include "common/version.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "io/scene_file.hpp"
 #include "io/trajectory_file.hpp"
 #include "io/h5.hpp"
@@ -142,7 +142,7 @@ TEST_F(Cli, SceneCommandWritesAChainThatSimulates) {
   EXPECT_NE(r.out.find("status ok"), std::string::npos) << r.out;
 }
 
-// the connector stiffness of `divcoll scene` is the config's (io/pipeline.hpp), the paper's without --config
+// the connector stiffness of `divcoll scene` is the config's (config/pipeline.hpp), the paper's without --config
 TEST_F(Cli, SceneTakesTheConnectorStiffnessFromTheConfig) {
   { std::ofstream(path("k.toml")) << "[connectors]\nweak_stiffness = 1234.0\nstrong_stiffness = 45678.0\n"; }
   const std::vector<std::pair<std::string, double>> cases = {

@@ -3,7 +3,7 @@
 #   cmake -DROOT=<source dir> -P tests/cmake/check_layers.cmake
 # Units, from the bottom up, and what each is (the CMake targets of CMakeLists.txt follow the same cut):
 #   common nn sim        divcoll_engine   the engine and the MLP (no MPI, no HDF5, no TOML)
-#   config               divcoll_config   io/config.*, io/environments.*, io/pipeline.hpp (TOML)
+#   config               divcoll_config   config/ (TOML config, environments, the stage list)
 #   morph collective evo analysis  divcoll_science  (no MPI, no HDF5)
 #   io                   divcoll_io       the rest of io/ (HDF5)
 #   cli                  divcoll_cli      the single-process commands
@@ -25,9 +25,7 @@ set(DIVCOLL_LEVEL_mpi 9)
 # the unit of a path relative to the root (src/sim/engine.cpp) or of an include ("sim/engine.hpp")
 function(divcoll_unit path out)
   string(REGEX REPLACE "^src/" "" p "${path}")
-  if(p MATCHES "^io/(config|environments|embedded_configs|pipeline)")
-    set(u config)
-  elseif(p MATCHES "^mpi/")
+  if(p MATCHES "^mpi/")
     set(u mpi)
   elseif(p MATCHES "^([a-z_]+)/")
     set(u ${CMAKE_MATCH_1})

@@ -5,7 +5,7 @@
 
 #include "collective/deploy_variants.hpp"
 #include "common/check.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "testing.hpp"
 
 namespace divcoll {

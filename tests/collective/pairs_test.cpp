@@ -8,7 +8,7 @@
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "morph/body.hpp"
 #include "testing.hpp"
 

@@ -11,7 +11,7 @@
 #include <variant>
 #include <vector>
 
-#include "io/config.hpp"
+#include "config/config.hpp"
 #include "io/h5.hpp"
 #include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "collective/builders.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
 

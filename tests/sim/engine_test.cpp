@@ -6,7 +6,7 @@
 
 #include "collective/builders.hpp"
 #include "common/check.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "morph/body.hpp"
 #include "testing.hpp"
 #include "sim/engine.hpp"

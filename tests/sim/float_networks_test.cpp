@@ -10,7 +10,7 @@
 #include <limits>
 
 #include "collective/builders.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "io/scene_file.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"

@@ -9,7 +9,7 @@
 #include <functional>
 
 #include "collective/builders.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/check.hpp"
-#include "io/config.hpp"
+#include "config/config.hpp"
 
 namespace divcoll::io {
 

@@ -1,6 +1,6 @@
 // the run configuration: presets parse, paper.toml is the defaults, bad keys, types, ranges and impossible
 // combinations are refused naming the key, overrides get the same checks, and to_toml / flat round-trip
-#include "io/config.hpp"
+#include "config/config.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "common/check.hpp"
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 #include "testing.hpp"
 
 namespace divcoll::io {

@@ -1,6 +1,6 @@
 // the run configuration: one schema table (schema() below) drives parsing, checking, the resolved TOML
 // echo, the flat key/value list and configs/README.md's key table
-#include "io/config.hpp"
+#include "config/config.hpp"
 
 #include <toml++/toml.h>
 
@@ -15,8 +15,8 @@
 #include <variant>
 
 #include "common/check.hpp"
-#include "io/environments.hpp"
-#include "io/pipeline.hpp"
+#include "config/environments.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::io {
 namespace {
@@ -84,7 +84,7 @@ std::string string_list(const std::vector<std::string>& v) {
   return out + "]";
 }
 
-// the stage and connector-kind names come from their tables (io/pipeline.hpp)
+// the stage and connector-kind names come from their tables (config/pipeline.hpp)
 const std::vector<std::string> kStages = [] {
   std::vector<std::string> v;
   for (const StageInfo& s : kStageTable) v.emplace_back(s.name);

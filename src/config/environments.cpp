@@ -1,4 +1,4 @@
-#include "io/environments.hpp"
+#include "config/environments.hpp"
 
 #include <algorithm>
 #include <atomic>
