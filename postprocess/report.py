@@ -23,11 +23,11 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-import claims  # noqa: E402
 import report_episodes  # noqa: E402
 import report_html  # noqa: E402
 import summary  # noqa: E402
 from divcoll_post import analysis as A  # noqa: E402
+from divcoll_post import single_run, verdicts as V  # noqa: E402
 
 # figure scripts, in the paper's order, with the arguments they take besides the run file and --out
 FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig3.py", []), ("fig4.py", []), ("fig_s2.py", []),
@@ -153,7 +153,7 @@ def movie_section(run, out_dir, divcoll, eps=None):
 
 def scale_section(run):
     """the preset and its counts against the paper's"""
-    name, rows = claims.scale(run)
+    name, rows = single_run.scale(run)
     small = [r for r in rows if isinstance(r[2], (int, float)) and isinstance(r[3], (int, float)) and r[2] < r[3]]
     if small:
         verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** This page reports "
@@ -172,7 +172,7 @@ def scale_section(run):
 
 def precision_line(run):
     """the run's arithmetic (run.precision): two runs in different precisions are different runs, never bit-equal"""
-    prec = claims.key(claims.config(run), "run.precision") or "double"
+    prec = single_run.key(single_run.config(run), "run.precision") or "double"
     if prec == "float_networks":
         return ("Arithmetic: `run.precision = float_networks`: the controllers' networks in float, the physics and every "
                 "optimizer in double (jobs/BENCHMARKS.md, \"The float path\"); its numbers are not bit-comparable with a double run's.")
@@ -187,11 +187,16 @@ def write_report(run, out_dir, divcoll, movie=False, quick=False):
     lines = [summary.summarize(run).replace("# divcoll run summary", "# divcoll report", 1), ""]
     eps = report_episodes.Episodes(run, os.path.abspath(run))
     table = ["## The paper's claims beside this run", "",
+             f"The pre-registered claims (configs/studies/verdicts_protocol.md, the verdict page's "
+             f"{V.CLAIMS[0].id}–{V.CLAIMS[-1].id}), each "
+             "judged on this run alone: its effect at all of the run's connectors against the claim's own margin "
+             "(held when it lies in the region the claim names); the verdict page judges the same effects over "
+             "populations.", "",
              "| claim | this run | verdict | counts the test needs | episodes |", "|---|---|---|---|---|"]
-    verdicts = {"held": 0, "did not hold": 0, "too small to judge": 0, "not measured": 0}
-    for (text, fn), (_, number, v, needs) in zip(claims.CLAIMS, claims.claims(run)):
+    verdicts = {v: 0 for v in single_run.VERDICTS}
+    for c, number, v, needs in single_run.claims(run):
         verdicts[v] += 1
-        table.append(f"| {text} | {number} | **{v}** | {needs} | {eps.claim_cell(fn.__name__, number)} |")
+        table.append(f"| **{c.id}** {c.text} | {number} | **{v}** | {needs} | {eps.claim_cell(c, number)} |")
     table += ["", ", ".join(f"{n} {v}" for v, n in verdicts.items()) + ". Episodes: each link leads to the "
               "`divcoll export` command of the median ok episode of one cell the number averages over (an environment "
               "and an agent alone, a collective type, a specialist or a chain; replicate 0 for connectors), listed "

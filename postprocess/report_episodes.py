@@ -151,42 +151,26 @@ class Episodes:
         got = [f"[{env.replace('_', ' ')}](#{a})" for env, a in anchors if a]
         return f"{label}: " + " · ".join(got) if got else ""
 
-    def claim_cell(self, fn, number):
-        """the claims table's episodes cell of claim function `fn` whose number text is `number` (Markdown)"""
+    def claim_cell(self, claim, number):
+        """the claims table's episodes cell of a registry claim (verdicts.Claim: its `episodes` plan) whose number
+        text is `number` (Markdown)"""
+        note, alone, types, where = claim.episodes
         novel = [e for e in self.envs if e != "flat"]
-        scope = {"flat": ["flat"], "novel": novel, "all": self.envs, "wind": ["flat", "wind"]}
-        named = [t for t in self.types if re.search(rf"(?<![\w@]){re.escape(t)}(?![\w@])", number)]
-        asdeployed = [t for t in self.types if t.split("@")[0].endswith("_" + t.split("@")[1])]
-        weak = [t for t in self.types if t.startswith("weak")]
-        pair2 = [t for t in ("weak_uniform@uniform", "weak_diverse@diverse") if t in self.types]
-        plan = {  # claim: (note, with agents alone?, types, environments)
-            "c_agents_trained": ("agents-stage training episodes are not exported; the deployment alone on flat:",
-                                 True, [], "flat"),
-            "c_agents_drop": ("", True, named, "all"),
-            "c_untrained_drop": ("connector-training batches are not exported", False, [], "flat"),
-            "c_trained_beat_alone": ("", True, asdeployed, "flat"),
-            "c_weak_diverse_best_flat": ("", False, asdeployed, "flat"),
-            "c_all_drop_novel": ("", False, self.types, "all"),
-            "c_weak_diverse_best_novel": ("", True, named, "novel"),
-            "c_transplant": ("", False, weak, "flat"),
-            "c_weak_diverse_most_envs": ("", True, weak, "novel"),
-            "c_graded": ("graded-stage episodes are not exported; the main population's:", True,
-                         ["weak_diverse@diverse"], "novel"),
-            "c_specialists": ("", False, ["weak_diverse@diverse"], "novel"),
-            "c_scaling": ("", False, [], "novel"),
-            "c_wind_unfamiliar": ("", False, pair2, "wind"),
-            "c_more_familiar": ("", False, pair2, "all"),
-            "c_uniform_more_novel_states": ("", False, pair2, "all"),
+        scope = {"flat": ["flat"], "novel": novel, "all": self.envs, "wind": ["flat", "wind"], "none": [],
+                 "specialists": self.spec_envs, "chains": []}
+        select = {
+            "named": [t for t in self.types if re.search(rf"(?<![\w@]){re.escape(t)}(?![\w@])", number)],
+            "matched": [t for t in self.types if t.split("@")[0].endswith("_" + t.split("@")[1])],
+            "weak": [t for t in self.types if t.startswith("weak")],
+            "all": self.types,
+            "pair": [t for t in ("weak_uniform@uniform", "weak_diverse@diverse") if t in self.types],
         }
-        dtw = ("each tethered agent is compared with its own episode alone (`--what alone --agent I`); the pairs:",
-               False, pair2, "all")
-        note, alone, types, where = plan.get(fn, dtw)
-        parts = []
+        types = select[types] if isinstance(types, str) else [t for t in types if t in self.types]
         envs = scope[where]
-        if fn == "c_specialists":
+        parts = []
+        if where == "specialists":
             parts.append(self.links("specialist", [(e, self.specialist(e)) for e in self.spec_envs]))
-            envs = self.spec_envs
-        if fn == "c_scaling":
+        if where == "chains":
             for n in self.sizes:
                 for v in ("uniform", "diverse"):
                     parts.append(self.links(f"{v} chains of {n}", [(e, self.chain(e, n, v)) for e in self.scale_envs

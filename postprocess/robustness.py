@@ -1,32 +1,27 @@
 #!/usr/bin/python3
-"""The robustness page of a study folder (`divcoll study STUDY.toml --out DIR`): the paper's claims × the
-study's variants, each cell the claim's effect with a 95% confidence interval over seeds and a verdict, and
-the paper's Fig. 2A per variant with error bars over seeds.
+"""The robustness page of a study folder (`divcoll study STUDY.toml --out DIR`): the pre-registered claims
+(divcoll_post/verdicts.py's CLAIMS) × the study's variants, each cell the claim's effect with a 95% confidence interval
+over seeds and a verdict, and the paper's Fig. 2A per variant with error bars over seeds.
 
     /usr/bin/python3 postprocess/robustness.py DIR [--out OUT]     (what `divcoll report DIR` runs)
 
 Writes OUT/robustness.md and OUT/figures/fig2a_<variant>.png (OUT defaults to DIR/robustness), and beside each
-run file DIR/<variant>/seed<k>.h5 its summary DIR/<variant>/seed<k>.summary.json: every number this page reads
-from that run (each claim's verdict and effect under each reading, Fig. 2A's per-environment means) with the run's
-config and commits, a few KB. A run whose .h5 is gone is read from its summary, so a study folder kept as its
-manifest, base config and summaries (e.g. in postprocess/gallery/studies/) gives the same page, and seeds run
-in different sessions or on a cluster can be gathered in one folder (`divcoll study --resume` counts a run
-with a summary as complete).
+run file DIR/<variant>/seed<k>.h5 its summary DIR/<variant>/seed<k>.summary.json (each claim's single-run verdict and
+effect under each reading, Fig. 2A's per-environment means, the run's config and commits) and its arrays
+DIR/<variant>/seed<k>.arrays.json (verdicts.extract). A run whose .h5 is gone is read from its arrays (a summary
+alone, as kept by older studies, gives only the claims that read the deployment's travel), so a study folder kept as
+its manifest, base config, summaries and arrays (e.g. in postprocess/gallery/studies/) gives the same page.
 
-Every claim is the one of claims.py, evaluated by claims.py on each run file (the "held in k/n seeds" count
-uses its verdicts unchanged). The effect of a claim is the margin of the comparison behind claims.py's verdict,
-signed so that a positive effect is the claim's direction (EFFECTS below says which margin, in which unit):
-e.g. "trained collectives travel further than their agents alone" has the effect min over the four kinds
-deployed as trained of (collective − agents alone) on flat, in BL. Per variant the effects of its seeds give
-mean ± the Student t 95% interval over seeds (mean ± t(0.975, n−1)·s/√n, s the sample sd over seeds). Verdict:
-**holds** if the interval lies above 0, **fails** if it lies below 0, **unresolved** if it contains 0, **too
-few seeds** with fewer than 3 seeds (the interval is still shown from 2), not measured if the runs lack the
-stage. "Comparable" claims (no difference expected) are the other way round: holds if the interval contains 0.
+A claim's per-seed value is its single-run view (divcoll_post/single_run.py): the registry's effect at all of the
+run's connectors, "held" when it lies in the claim's region (verdicts.region). Per variant the effects of its seeds
+give mean ± the Student t 95% interval over seeds (mean ± t(0.975, n−1)·s/√n, s the sample sd over seeds). Verdict:
+**holds** if the interval lies inside the claim's region, **fails** if it lies wholly outside, **unresolved**
+otherwise, **too few seeds** with fewer than 3 seeds (the interval is still shown from 2), not measured if the runs
+lack the stage.
 """
 from __future__ import annotations
 
 import argparse
-import copy
 import os
 import subprocess
 import sys
@@ -37,173 +32,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-import claims as C  # noqa: E402
-from divcoll_post import analysis as A  # noqa: E402
+from divcoll_post import single_run as S  # noqa: E402
+from divcoll_post import verdicts as V  # noqa: E402
+from divcoll_post.results import load_deploy, ok_mean  # noqa: E402
 
 MIN_SEEDS = 3
 LEVEL = 0.95
-
-
-# ---- effects: the signed margin of each claim's comparison (positive = the claim's direction) -----------------
-
-def _as_trained(r):
-    return [t for t in r.types if t.split("@")[0].split("_")[1] == t.split("@")[1]]
-
-
-def e_agents_trained(r):
-    return None if r.fitness is None else float(r.fitness.mean()) - 3.0
-
-
-def e_agents_drop(r):
-    if not r.has["deploy"]:
-        return None
-    alone = 1 - r.novel_mean(r.alone) / r.alone[r.flat]
-    return alone - max(1 - r.novel_mean(m) / m[r.flat] for m in r.coll.values())
-
-
-def e_untrained_drop(r):
-    if not r.curves or r.fitness is None:
-        return None
-    return 0.5 * float(r.fitness.mean()) - max(c[0] for c in r.curves.values())
-
-
-def e_trained_beat_alone(r):
-    if not r.has["deploy"]:
-        return None
-    return min(r.coll[t][r.flat] for t in _as_trained(r)) - r.alone[r.flat]
-
-
-def e_weak_diverse_best_flat(r):
-    if not r.has["deploy"]:
-        return None
-    others = [t for t in _as_trained(r) if t != "weak_diverse@diverse"]
-    if not others:
-        return None
-    return r.coll["weak_diverse@diverse"][r.flat] - max(r.coll[t][r.flat] for t in others)
-
-
-def e_all_drop_novel(r):
-    if not r.has["deploy"]:
-        return None
-    return min(r.coll[t][r.flat] - r.novel_mean(r.coll[t]) for t in r.types)
-
-
-def e_weak_diverse_best_novel(r):
-    if not r.has["deploy"]:
-        return None
-    others = [t for t in r.types if t != "weak_diverse@diverse"]
-    return r.novel_mean(r.coll["weak_diverse@diverse"]) - max(r.novel_mean(r.coll[t]) for t in others)
-
-
-def e_transplant(r):
-    if not r.has["deploy"]:
-        return None
-    dd, du = r.coll["weak_diverse@diverse"][r.flat], r.coll["weak_diverse@uniform"][r.flat]
-    uu, ud = r.coll["weak_uniform@uniform"][r.flat], r.coll["weak_uniform@diverse"][r.flat]
-    return min(0.25 * abs(dd) - (dd - du), uu - ud)
-
-
-def e_weak_diverse_most_envs(r):
-    if not r.has["deploy"]:
-        return None
-    weak = [t for t in r.types if t.startswith("weak")]
-    wins = sum(1 for e in r.novel if max(weak, key=lambda t: r.coll[t][e]) == "weak_diverse@diverse")
-    beats = sum(1 for e in r.novel if r.coll["weak_diverse@diverse"][e] > r.alone[e])
-    return (min(wins, beats) - len(r.novel) / 2) / len(r.novel)
-
-
-def e_specialists(r):
-    if not (r.has["specialists"] and r.has["deploy"]):
-        return None
-    gen = np.array([r.coll["weak_diverse@diverse"][r.envs.index(e)] for e in r.spec_envs])
-    return float(np.max(gen - r.spec_best))
-
-
-def e_scaling(r):
-    if not r.has["scaling"]:
-        return None
-    adv = r.scale[:, 1] - r.scale[:, 0]
-    return float(min(np.min(np.diff(adv)) if len(adv) > 1 else np.inf, adv[-1]))
-
-
-def e_graded(r):
-    if not (r.has["graded"] and r.has["deploy"]):
-        return None
-    rows = [(r.novel_mean(r.alone), r.novel_mean(r.coll["weak_diverse@diverse"]))] + list(r.graded.values())
-    g = [p - a for a, p in rows]
-    return min(g[0] - g[1], g[1] - g[2])
-
-
-def e_diverse_disrupted_more(r):
-    adv = C._adversity(r)
-    if adv is None:
-        return None
-    return float(np.nanmean(adv.all_replicate_means(A.DIVERSE)) - np.nanmean(adv.all_replicate_means(A.UNIFORM)))
-
-
-def e_worse_altered_more(r):
-    adv = C._adversity(r)
-    return None if adv is None else min(adv.mean(t, A.WORSE) - adv.mean(t, A.BETTER) for t in A.TYPES)
-
-
-def e_diverse_change_worse_more(r):
-    adv = C._adversity(r)
-    return None if adv is None else adv.mean(A.DIVERSE, A.WORSE) - adv.mean(A.UNIFORM, A.WORSE)
-
-
-def e_better_comparable(r):
-    adv = C._adversity(r)
-    return None if adv is None else adv.mean(A.DIVERSE, A.BETTER) - adv.mean(A.UNIFORM, A.BETTER)
-
-
-def _majority(r, count, first, second):
-    """(environments where the familiarity table's count `count` of type `first` exceeds `second`'s − half of them)
-    / environments: positive when it is most environments"""
-    fam = C._familiarity(r)
-    if fam is None:
-        return None
-    tab, n = fam.best_table(), len(fam.envs)
-    return (sum(1 for i in range(n) if tab[i, count, first] > tab[i, count, second]) - n / 2) / n
-
-
-def e_more_familiar(r):
-    return _majority(r, 0, 0, 1)  # states in shared cells, diverse-trained above uniform-trained
-
-
-def e_uniform_more_novel_states(r):
-    return _majority(r, 2, 1, 0)  # novel-only states, uniform-trained above diverse-trained
-
-
-def e_wind_unfamiliar(r):
-    fam = C._familiarity(r)
-    if fam is None or A.WIND not in fam.envs:
-        return None
-    t = fam.best_table()[fam.envs.index(A.WIND)]
-    return min(t[0, 0] - t[0, 1], (t[1, 1] + t[2, 1]) - (t[1, 0] + t[2, 0]))
-
-
-# claims.py's claim function -> (effect, what the effect is, unit, "equal" for a claim of no difference)
-EFFECTS = {
-    C.c_agents_trained: (e_agents_trained, "final population's mean fitness − 3", "BL", False),
-    C.c_agents_drop: (e_agents_drop, "relative drop flat → novel of agents alone − the largest of any collective type", "", False),
-    C.c_untrained_drop: (e_untrained_drop, "half the agents' fitness − the best untrained batch mean", "BL", False),
-    C.c_trained_beat_alone: (e_trained_beat_alone, "min over kinds deployed as trained of (collective − agents alone) on flat", "BL", False),
-    C.c_weak_diverse_best_flat: (e_weak_diverse_best_flat, "weak diverse@diverse − the best other kind as trained, flat", "BL", False),
-    C.c_all_drop_novel: (e_all_drop_novel, "min over types of (flat − novel mean)", "BL", False),
-    C.c_weak_diverse_best_novel: (e_weak_diverse_best_novel, "weak diverse@diverse − the best other type, novel mean", "BL", False),
-    C.c_transplant: (e_transplant, "min(¼·abs(dd) − (dd − du), uu − ud) on flat, dd = diverse-trained on diverse pairs, du = on clones, uu, ud the same for uniform-trained", "BL", False),
-    C.c_weak_diverse_most_envs: (e_weak_diverse_most_envs, "(min(environments best of weak, environments above alone) − half) / environments", "", False),
-    C.c_specialists: (e_specialists, "max over environments of (generalist − best specialist)", "BL", False),
-    C.c_scaling: (e_scaling, "min(growth of diverse − uniform from size to size, its value at the largest size)", "BL", False),
-    C.c_graded: (e_graded, "min of the steps in (pairs − alone) from more to fewer sources of diversity", "BL", False),
-    C.c_diverse_disrupted_more: (e_diverse_disrupted_more, "DTW per step, diverse-trained − uniform-trained, all agents", "u", False),
-    C.c_worse_altered_more: (e_worse_altered_more, "min over the two types of (worse − better agent's DTW per step)", "u", False),
-    C.c_diverse_change_worse_more: (e_diverse_change_worse_more, "worse agents' DTW per step, diverse-trained − uniform-trained", "u", False),
-    C.c_better_comparable: (e_better_comparable, "better agents' DTW per step, diverse-trained − uniform-trained (claim: ≈ 0)", "u", True),
-    C.c_more_familiar: (e_more_familiar, "(environments where diverse-trained has more shared-cell states − half) / environments", "", False),
-    C.c_uniform_more_novel_states: (e_uniform_more_novel_states, "(environments where uniform-trained has more novel-only states − half) / environments", "", False),
-    C.c_wind_unfamiliar: (e_wind_unfamiliar, "min(shared states diverse − uniform, one-sided states uniform − diverse), wind", "states", False),
-}
 
 
 def t_interval(values, level=LEVEL):
@@ -220,14 +54,18 @@ def t_interval(values, level=LEVEL):
     return m, m - h, m + h, n
 
 
-def verdict(mean, lo, hi, n, equal=False):
+def verdict(mean, lo, hi, n, region=(0.0, np.inf)):
+    """the interval [lo, hi] over n seeds against the claim's region (verdicts.region)"""
     if n == 0:
         return "not measured"
     if n < MIN_SEEDS:
         return "too few seeds"
-    if equal:
-        return "holds" if lo <= 0 <= hi else "fails"
-    return "holds" if lo > 0 else "fails" if hi < 0 else "unresolved"
+    a, b = region
+    if a < lo and hi < b:
+        return "holds"
+    if hi <= a or lo >= b:
+        return "fails"
+    return "unresolved"
 
 
 def num(x):
@@ -237,8 +75,13 @@ def num(x):
 # ---- run summaries: what this page reads from one run file, kept beside it ----------------------------------------
 
 SUMMARY_FORMAT = "divcoll-run-summary"
-SUMMARY_VERSION = 1
+SUMMARY_VERSION = 2  # claims by registry id; version 1 (older kept studies) keyed them by the old single-run claims
 AS_RUN = "as_run"  # the key of the claims as the run's own config reads them
+# report-time readings of analysis.alone_protocol: a run made with same_length is also read under each of these
+# (verdicts.Population.alone); training_length needs deploy.early_step
+READINGS = [("training_length", "agents alone at their training length (travel at deploy.early_step), collectives "
+                                "over the deployment"),
+            ("training_rate", "agents alone's deployment travel × connectors.episode_steps / deploy.episode_steps")]
 
 
 def summary_path(run_path):
@@ -249,72 +92,82 @@ def _finite_or_none(x):
     return None if x is None or not np.isfinite(x) else float(x)
 
 
-def _cell(fn, run):
-    """(claims.py's verdict, the effect or None) of claim function `fn` on a claims.Run or a reading of one"""
-    try:
-        _, vd = fn(run)
-        e = EFFECTS[fn][0](run)
-    except (KeyError, ValueError, IndexError, ZeroDivisionError):
-        vd, e = "not measured", None
-    return vd, e
+def _readings(pop, protocol):
+    """{reading: protocol} the run can be read under: its own, then the report-time readings"""
+    out = {AS_RUN: protocol}
+    if protocol == "same_length" and pop.has("deploy"):
+        for r, _ in READINGS:
+            if r == "training_length" and "alone_bl_early" not in pop.a["deploy"]:
+                continue
+            out[r] = r
+    return out
 
 
-def summarize(run):
-    """the summary dict of a claims.Run read from its run file"""
+def summarize(path):
+    """the summary dict of a run file (and its arrays, written beside it)"""
     import h5py
-    readings = {AS_RUN: run}
-    for protocol, _ in READINGS:
-        rr = reread(run, protocol)
-        if rr is not None:
-            readings[protocol] = rr
+    V.write_arrays(path)
+    arrays = V.read_arrays(V.arrays_path(path))
+    cfg = S.config(path)
+    pop = V.Population(arrays.get("seed"), [arrays])
+    readings = _readings(pop, S.protocol_of(cfg))
     claims = {}
-    for key, r in readings.items():
+    for key, protocol in readings.items():
         claims[key] = {}
-        for _, fn in C.CLAIMS:
-            if key == AS_RUN or fn in ALONE_CLAIMS:
-                vd, e = _cell(fn, r)
-                claims[key][fn.__name__] = {"verdict": vd, "effect": _finite_or_none(e)}
+        for c in V.CLAIMS:
+            if key == AS_RUN or c.reads_alone:
+                _, e, vd = S.evaluate(c, pop, protocol)
+                claims[key][c.id] = {"verdict": vd, "effect": _finite_or_none(e)}
     fig = None
-    if run.has["deploy"]:
-        fig = {"environments": run.envs, "types": run.types,
-               "alone": {k: [float(x) for x in r.alone] for k, r in readings.items()},
-               "collectives": {t: [float(x) for x in run.coll[t]] for t in run.types}}
-    with h5py.File(run.path, "r") as f:
-        attrs = {a: C._s(f.attrs[a]) for a in ("git_commit", "base_git_commit", "start_time", "end_time")
+    if pop.has("deploy"):
+        dep = load_deploy(path)
+        fig = {"environments": dep.envs, "types": dep.types,
+               "alone": {k: [float(x) for x in pop.alone(p)] for k, p in readings.items()},
+               "collectives": {t: [ok_mean(*dep.collective(t, e))[0] for e in dep.envs] for t in dep.types}}
+    with h5py.File(path, "r") as f:
+        attrs = {a: V._s(f.attrs[a]) for a in ("git_commit", "base_git_commit", "start_time", "end_time")
                  if a in f.attrs}
-        # the run's config as its values (the run file's TOML text, comments and all, is about 12 KB)
-        attrs["config"] = tomllib.loads(C._s(f.attrs["config"])) if "config" in f.attrs else {}
-    return {"format": SUMMARY_FORMAT, "version": SUMMARY_VERSION, "run_file": os.path.basename(run.path),
-            **attrs, "stages_complete": run.has, "claims": claims, "fig2a": fig}
+    attrs["config"] = cfg  # the run's config as its values (the run file's TOML text, comments and all, is ~12 KB)
+    return {"format": SUMMARY_FORMAT, "version": SUMMARY_VERSION, "run_file": os.path.basename(path),
+            **attrs, "stages_complete": {st: pop.has(st) for st in S.STAGES}, "claims": claims, "fig2a": fig}
 
 
-def write_summary(run):
-    """writes the summary of a claims.Run beside its run file (atomically); returns its path"""
+def write_summary(path):
+    """writes the summary of a run file beside it (atomically); returns its path"""
     import json
-    path = summary_path(run.path)
-    tmp = path + ".tmp"
+    out = summary_path(path)
+    tmp = out + ".tmp"
     with open(tmp, "w") as fh:
-        json.dump(summarize(run), fh, indent=None, sort_keys=True)
+        json.dump(summarize(path), fh, indent=None, sort_keys=True)
         fh.write("\n")
-    os.replace(tmp, path)
-    return path
+    os.replace(tmp, out)
+    return out
 
 
 class SummaryRun:
-    """a run read from its summary: what evaluate() and fig2a_values() use of a claims.Run. from_file: the summary was
-    written from the run file beside it just now (else the folder holds the summary alone)"""
+    """a run read from its summary and, where kept, its arrays: each claim's single-run value from the arrays
+    (a summary alone: from its Fig. 2A means, the claims that read the deployment's travel only). from_file: both
+    were written from the run file beside them just now"""
 
-    def __init__(self, path, data=None, reading=AS_RUN, from_file=False):
+    def __init__(self, path, data=None, reading=AS_RUN, from_file=False, pop=None):
         import json
         self.path, self.from_file = path, from_file
         if data is None:
             with open(path) as fh:
                 data = json.load(fh)
-            if data.get("format") != SUMMARY_FORMAT or data.get("version") != SUMMARY_VERSION:
-                raise ValueError(f"{path} is not a divcoll run summary of version {SUMMARY_VERSION}")
+            if data.get("format") != SUMMARY_FORMAT or data.get("version") not in (1, SUMMARY_VERSION):
+                raise ValueError(f"{path} is not a divcoll run summary of version 1 or {SUMMARY_VERSION}")
         self.data, self.reading = data, reading
         self.has = data["stages_complete"]
         self.config = data.get("config", {})
+        if pop is None:
+            arrays = os.path.splitext(os.path.splitext(path)[0])[0] + ".arrays.json"
+            if os.path.exists(arrays):
+                a = V.read_arrays(arrays)
+                pop = V.Population(a.get("seed"), [a])
+            elif data.get("fig2a"):
+                pop = V.population_from_summary(path) if os.path.exists(path) else None
+        self.pop = pop
         fig = data.get("fig2a")
         if fig:
             self.envs, self.types = fig["environments"], fig["types"]
@@ -326,27 +179,33 @@ class SummaryRun:
     def novel_mean(self, arr):
         return float(np.mean(arr[self.novel]))
 
-    def cell(self, fn):
-        c = self.data["claims"][self.reading].get(fn.__name__)
-        if c is None:
+    def protocol(self):
+        return S.protocol_of(self.config) if self.reading == AS_RUN else self.reading
+
+    def cell(self, claim):
+        """(single-run verdict, effect or None) of a registry claim"""
+        if self.pop is None:
             return "not measured", None
-        return c["verdict"], c["effect"]
+        _, e, vd = S.evaluate(claim, self.pop, self.protocol())
+        return vd, e
 
     def reread(self, protocol):
-        return SummaryRun(self.path, self.data, protocol, self.from_file) if protocol in self.data["claims"] else None
+        """this run under report-time reading `protocol`, None when the run cannot be read so"""
+        fig = self.data.get("fig2a") or {}
+        if protocol not in fig.get("alone", {}):
+            return None
+        return SummaryRun(self.path, self.data, protocol, self.from_file, self.pop)
 
     def commits(self):
         return {self.data[a] for a in ("git_commit", "base_git_commit") if a in self.data}
 
 
 def load_run(folder, rel):
-    """the run at `rel` in the study folder, read from its summary: written anew from the run file when that is
-    there, else the one kept; None if neither. The page reads every run the same way, from what is on disk."""
+    """the run at `rel` in the study folder: its summary and arrays written anew from the run file when that is
+    there, else the ones kept; None if neither. The page reads every run the same way, from what is on disk."""
     path = os.path.join(folder, rel)
     if os.path.exists(path):
-        from divcoll_post import verdicts as V
-        V.write_arrays(path)  # the protocol's per-connector arrays (verdicts.py), kept beside the summary
-        return SummaryRun(write_summary(C.Run(path)), from_file=True)
+        return SummaryRun(write_summary(path), from_file=True)
     if os.path.exists(summary_path(path)):
         return SummaryRun(summary_path(path))
     return None
@@ -363,34 +222,6 @@ def load_manifest(folder):
     if m.get("format") != "divcoll-study":
         raise ValueError(f"{path} is not a divcoll study manifest")
     return m
-
-
-# claims whose verdict or effect reads agents alone (the only numbers analysis.alone_protocol changes)
-ALONE_CLAIMS = {C.c_agents_drop, C.c_trained_beat_alone, C.c_weak_diverse_most_envs, C.c_graded}
-# report-time readings of analysis.alone_protocol: a run made with same_length is also read under each of these
-# (claims.alone_under_protocol); training_length needs deploy.early_step
-READINGS = [("training_length", "agents alone at their training length (travel at deploy.early_step), collectives "
-                                "over the deployment"),
-            ("training_rate", "agents alone's deployment travel × connectors.episode_steps / deploy.episode_steps")]
-
-
-def reread(run, protocol):
-    """a copy of the claims.Run with agents alone read under `protocol` (None when the run cannot be)"""
-    import h5py
-    import summary
-    if not run.has["deploy"]:
-        return None
-    with h5py.File(run.path, "r") as f:
-        cfg = tomllib.loads(C._s(f.attrs["config"]))
-        if protocol == "training_length" and (cfg.get("deploy", {}).get("early_step", 0) <= 0
-                                              or "agents/travel_bl_early" not in f["deploy"]):
-            return None
-        d = f["deploy"]
-        same, _ = summary.env_means(d["agents/travel_bl"][()], d["agents/status"][()])
-        alone = C.alone_under_protocol(f, same, protocol)
-    r = copy.copy(run)
-    r.alone = alone
-    return r
 
 
 def columns(folder, manifest):
@@ -422,26 +253,25 @@ def columns(folder, manifest):
 
 
 def evaluate(folder, manifest):
-    """{column: {"source", "protocol", "set", "doc", "seeds", "runs", "cells": [(claim text, mean, lo, hi, n,
-    verdict, held, n_eval)]}}; a report-time reading's cells of claims that do not read agents alone are
-    verdict "as source" (the same numbers as its source variant's column)"""
+    """{column: {"source", "protocol", "set", "doc", "seeds", "runs", "cells": [(claim, mean, lo, hi, n,
+    verdict, held, n_eval)]}} in the registry's order; a report-time reading's cells of claims that do not read
+    agents alone are verdict "as source" (the same numbers as its source variant's column)"""
     out = {}
     for name, source, protocol, sets, doc, runs in columns(folder, manifest):
         cells = []
-        for text, fn in C.CLAIMS:
-            eff, _, _, equal = EFFECTS[fn]
-            if protocol is not None and fn not in ALONE_CLAIMS:
-                cells.append((text, float("nan"), float("nan"), float("nan"), 0, "as source", 0, 0))
+        for c in V.CLAIMS:
+            if protocol is not None and not c.reads_alone:
+                cells.append((c, float("nan"), float("nan"), float("nan"), 0, "as source", 0, 0))
                 continue
             values, held, measured = [], 0, 0
             for _, run in runs:
-                vd, e = run.cell(fn)
+                vd, e = run.cell(c)
                 if vd != "not measured":
                     measured += 1
                     held += vd == "held"
                 values.append(e)
             m, lo, hi, n = t_interval(values)
-            cells.append((text, m, lo, hi, n, verdict(m, lo, hi, n, equal), held, measured))
+            cells.append((c, m, lo, hi, n, verdict(m, lo, hi, n, V.region(c)), held, measured))
         out[name] = {"source": source, "protocol": protocol, "set": sets, "doc": doc,
                      "seeds": [s for s, _ in runs], "runs": [r for _, r in runs], "cells": cells}
     return out
@@ -469,7 +299,7 @@ def summary_figure(res, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     names = list(res)
-    rows = [i for i in range(len(C.CLAIMS)) if any(res[c]["cells"][i][4] > 0 for c in names)]
+    rows = [i for i in range(len(V.CLAIMS)) if any(res[c]["cells"][i][4] > 0 for c in names)]
     if not rows:
         return False
     ncol = 4
@@ -477,7 +307,7 @@ def summary_figure(res, path):
     fig, axes = plt.subplots(nrow, ncol, figsize=(3.2 * ncol, 2.5 * nrow), squeeze=False)
     colors = {"holds": "#1a9641", "fails": "#d7191c", "unresolved": "#777777", "too few seeds": "#bbbbbb"}
     for ax, i in zip(axes.flat, rows):
-        text, fn = C.CLAIMS[i]
+        claim = V.CLAIMS[i]
         shown = [c for c in names if res[c]["cells"][i][4] > 0 and np.isfinite(res[c]["cells"][i][1])]
         for k, c in enumerate(shown):
             _, m, lo, hi, n, vd, _, _ = res[c]["cells"][i]
@@ -491,10 +321,10 @@ def summary_figure(res, path):
         ax.set_xticklabels([c.replace(" · ", "\n· ").replace("_", " ") for c in shown], fontsize=5, rotation=60,
                            ha="right")
         ax.set_xlim(-0.5, len(shown) - 0.5)
-        words = text.split()
+        words = f"{claim.id} {claim.text}".split()
         title = " ".join(words[:9]) + (" …" if len(words) > 9 else "")
         ax.set_title(title, fontsize=6)
-        unit = EFFECTS[fn][2]
+        unit = claim.unit
         ax.set_ylabel(f"effect ({unit})" if unit else "effect", fontsize=6)
         ax.tick_params(axis="y", labelsize=6)
     for ax in list(axes.flat)[len(rows):]:
@@ -607,27 +437,27 @@ def write_page(folder, out):
                      f"{len(col['seeds'])} ({', '.join(map(str, col['seeds']))}) | {', '.join(reuse) or '—'} |")
     if any(col["protocol"] for col in res.values()):
         lines += ["", "Columns `V · PROTOCOL` are variant V's run files read with `analysis.alone_protocol = PROTOCOL` "
-                      "at report time: that key changes only the agents-alone numbers claims.py compares with, so only "
+                      "at report time: that key changes only the agents-alone numbers the claims compare with, so only "
                       "the claims that read agents alone are evaluated again; the others are the same as V's "
                       "(\"as source\")."]
     if runs:
-        short = C.short_of(runs[0].config, C.NOVEL)
+        short = S.short_of(runs[0].config, V.N_NOVEL)
         if short:
-            lines += ["", f"A single run of this scale is below the counts claims.py needs to judge one run ({short}); "
-                          "here the evidence is the interval over seeds, and \"held k/n\" counts claims.py's raw test "
+            lines += ["", f"A single run of this scale is below the counts the claims need to judge one run ({short}); "
+                          "here the evidence is the interval over seeds, and \"held k/n\" counts the single-run verdicts "
                           "per seed."]
     lines += ["", "## Claims × variants", "",
-              "Each cell: the claim's effect (positive = the paper's direction; definitions below), mean over seeds "
-              f"with its Student t {LEVEL:.0%} interval over seeds, then how many seeds claims.py's own test held "
-              f"in, and the verdict (holds: interval above 0; fails: below 0; unresolved: contains 0; too few seeds: "
-              f"fewer than {MIN_SEEDS}).", ""]
+              "Each cell: the claim's effect (definitions below), mean over seeds with its Student t "
+              f"{LEVEL:.0%} interval over seeds, then in how many seeds the single-run effect held (lay in the claim's "
+              f"region), and the verdict (holds: interval inside the region; fails: wholly outside; unresolved: "
+              f"across its edge; too few seeds: fewer than {MIN_SEEDS}).", ""]
     if summary_figure(res, os.path.join(out, "robustness.png")):
         lines += ["![every claim's effect per variant](robustness.png)", ""]
     lines += ["| claim | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
     counts = {v: {} for v in variants}
-    for ci, (text, fn) in enumerate(C.CLAIMS):
-        unit = EFFECTS[fn][2]
-        row = [text]
+    for ci, c in enumerate(V.CLAIMS):
+        unit = c.unit
+        row = [f"**{c.id}** {c.text}"]
         for v in variants:
             _, m, lo, hi, n, vd, held, meas = res[v]["cells"][ci]
             counts[v][vd] = counts[v].get(vd, 0) + 1
@@ -640,10 +470,10 @@ def write_page(folder, out):
     lines += ["", "| verdicts | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
     for vd in ["holds", "fails", "unresolved", "too few seeds", "not measured", "as source"]:
         lines.append(f"| {vd} | " + " | ".join(str(counts[v].get(vd, 0)) for v in variants) + " |")
-    lines += ["", "## Effects", "", "| claim | effect (positive = the claim's direction) | unit |", "|---|---|---|"]
-    for text, fn in C.CLAIMS:
-        _, what, unit, equal = EFFECTS[fn]
-        lines.append(f"| {text} | {what}{' (holds if the interval contains 0)' if equal else ''} | {unit or '—'} |")
+    lines += ["", "## Effects", "", "| claim | effect | holds when | unit |", "|---|---|---|---|"]
+    for c in V.CLAIMS:
+        lines.append(f"| **{c.id}** {c.text} | {c.effect_text} | {S.effect_text(c, None).split('(')[1].rstrip(')')} | "
+                     f"{c.unit or '—'} |")
     lines += ["", "## Fig. 2A per variant", ""]
     for v in variants:
         png = os.path.join(fig_dir, f"fig2a_{v.replace(' · ', '__')}.png")
@@ -675,7 +505,7 @@ def main(argv=None):
         print(f"robustness: {e}", file=sys.stderr)
         return 2
     n = sum(len(r["cells"]) for r in res.values())
-    print(f"robustness: wrote {path} ({len(C.CLAIMS)} claims × {len(res)} variants = {n} cells)")
+    print(f"robustness: wrote {path} ({len(V.CLAIMS)} claims × {len(res)} variants = {n} cells)")
     if kept is not None:
         print(f"robustness: kept the study in {a.keep} ({kept} run summaries; `divcoll report {a.keep}` redraws the page)")
     return 0

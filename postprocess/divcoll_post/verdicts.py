@@ -72,7 +72,8 @@ def extract(path: str) -> dict:
         out["episode_steps"] = {"connectors": cfg.get("connectors", {}).get("episode_steps"),
                                 "deploy": cfg.get("deploy", {}).get("episode_steps")}
         if _complete(f, "agents"):
-            out["agents"] = {"fitness_mean": float(np.mean(f["agents/final/fitness"][()]))}
+            fit = f["agents/final/fitness"][()]
+            out["agents"] = {"fitness_mean": float(np.mean(fit)), "fitness_sd": float(np.std(fit))}
             if "agents/gen_000/curve_u" in f:
                 c = f["agents/gen_000/curve_u"][()][:, 0]
                 fit, tu = f["agents/gen_000/fitness"][()], f["agents/gen_000/travel_u"][()]
@@ -286,6 +287,32 @@ class Claim:
     effect: Callable  # (Population, draws or None, protocol) -> (b,) array
     band: Optional[tuple] = None
     reads_alone: bool = False
+    # the single-run view (the report of one run file, the robustness page's per-seed value): the config counts a
+    # run needs for its one value to be judged, what of this run's numbers to show, and the episodes to link
+    counts: tuple = ()  # ((config key, minimum, what it counts), ...)
+    describe: Optional[Callable] = None  # (Population, protocol) -> text of the run's numbers behind the effect
+    episodes: tuple = ("", False, (), "none")  # (note, link agents alone?, types, environments): see EPISODE_TYPES
+
+
+def region(c: Claim) -> tuple:
+    """(low, high): the effects for which the claim holds, open at both ends (greater: above 0; noninferior: above
+    −δ; equivalent: within ±δ; band: inside the band). One run holds the claim when its effect lies inside; an interval
+    over seeds holds it when it lies inside, fails it when it lies wholly outside."""
+    if c.form == "greater":
+        return 0.0, math.inf
+    if c.form == "noninferior":
+        return -c.margin, math.inf
+    if c.form == "band":
+        return tuple(c.band)
+    return -c.margin, c.margin
+
+
+def holds(c: Claim, x: float) -> Optional[bool]:
+    """the single-run verdict of effect x: True / False, None when x is not finite"""
+    if x is None or not np.isfinite(x):
+        return None
+    lo, hi = region(c)
+    return bool(lo < x < hi)
 
 
 def _drop(x, flat, novel):
@@ -454,83 +481,343 @@ def e_graded(p, d, pr):
     return main - p.graded_gain("same_shape_springs", d)
 
 
+# ---- the single-run view: the counts a run needs, and the numbers the report shows beside the effect ---------------
+
+# the counts a claim's single-run value needs before it is judged: (config key, minimum, what it counts). Thresholds sit
+# at about half the paper's counts: enough replicates for a mean over connectors, enough pairs for a mean over pairs
+# to settle, enough training for the "trained" in a claim to mean trained.
+N_AGENTS = (("agents.population", 50, "agents"), ("agents.generations", 10, "generations"))
+N_TRAINED = (("connectors.replicates", 5, "connector replicates"), ("connectors.iterations", 50, "training iterations"),
+             ("connectors.batch_pairs", 50, "pairs per batch"))
+N_DEPLOY = N_AGENTS + N_TRAINED + (("deploy.pairs", 50, "deployed pairs"),)
+N_NOVEL = N_DEPLOY + (("deploy.environments", 7, "environments"),)
+N_UNTRAINED = N_AGENTS + (("connectors.batch_pairs", 50, "pairs per batch"),)
+N_SPECIALISTS = N_NOVEL + (("specialists.replicates", 5, "specialists per environment"),
+                           ("specialists.iterations", 50, "specialist iterations"))
+N_SCALING = N_DEPLOY + (("scaling.chains", 100, "chains per size and variant (replicates × draws)"),
+                        ("scaling.n_sizes", 3, "chain sizes"))
+N_GRADED = N_NOVEL + (("graded.population", 50, "agents per graded population"),)
+N_ANALYSIS = N_DEPLOY + (("analysis.max_states", 5000, "hidden states per PaCMAP fit"),)
+
+# the episodes a claim's row links (report_episodes.py): types by name or one of these selectors
+EPISODE_TYPES = {"named": "the types the row's numbers name", "matched": "the four kinds deployed as trained",
+                 "weak": "the four weak types", "all": "every type", "pair": "weak_uniform@uniform, weak_diverse@diverse"}
+NOT_EXPORTED_DTW = ("each tethered agent is compared with its own episode alone (`--what alone --agent I`); the pairs:",
+                    False, "pair", "all")
+
+
+def f3(x):
+    return "—" if x is None or not np.isfinite(x) else f"{x:.2f}"
+
+
+def g3(x):
+    return "—" if x is None or not np.isfinite(x) else f"{x:.3g}"
+
+
+def _one(p):
+    """(E, T) travel per environment and type, mean over the run's connectors"""
+    return p.T(None)[0]
+
+
+def _novel(p, x):
+    return float(np.mean(np.asarray(x)[p.novel]))
+
+
+def _drops(p, pr):
+    T, a = _one(p), p.alone(pr)
+    out = {"agents alone": 1 - _novel(p, a) / a[p.flat]}
+    for i, t in enumerate(p.types):
+        out[t] = 1 - _novel(p, T[:, i]) / T[p.flat, i]
+    return out
+
+
+def d_fitness(p, pr):
+    a = p.a["agents"]
+    sd = a.get("fitness_sd")
+    return f"final population {f3(a['fitness_mean'])}" + (f" ± {f3(sd)}" if sd is not None else "") + " BL"
+
+
+def d_random(p, pr):
+    return f"random untrained (generation 0 before any gradient step) {f3(p.a['agents'].get('gen0_mean', np.nan))} BL"
+
+
+def d_alone_drop(p, pr):
+    return f"relative drop flat → novel of agents alone {_drops(p, pr)['agents alone']:.0%} (severe: more than 25%)"
+
+
+def d_greatest_drop(p, pr):
+    dr = _drops(p, pr)
+    worst = max(dr, key=dr.get)
+    return f"relative drop flat → novel: agents alone {dr['agents alone']:.0%}; largest: {worst} {dr[worst]:.0%}"
+
+
+def d_least_drop(p, pr):
+    dr = _drops(p, pr)
+    del dr["agents alone"]
+    least = min((t for t in dr if t != WD), key=dr.get)
+    return f"relative drop flat → novel: {WD} {dr[WD]:.0%}; least of the other types: {least} {dr[least]:.0%}"
+
+
+def d_untrained(p, pr):
+    u = p.untrained(None)[0]
+    kinds = list(p.a["connectors"]["untrained_bl"])
+    return (", ".join(f"{k} {f3(v)}" for k, v in zip(kinds, u)) + " BL (batch mean before the first step) vs agents "
+            f"alone {f3(p.a['agents']['fitness_mean'])} BL (1000 steps)")
+
+
+def _d_beat(p, alone, what):
+    T = _one(p)
+    return ", ".join(f"{t} {f3(T[p.flat, _ti(p, t)])}" for t in MATCHED) + f" vs agents alone {f3(alone[p.flat])} BL {what}"
+
+
+def d_beat_alone(p, pr):
+    return _d_beat(p, p.alone(pr), "on flat")
+
+
+def d_beat_alone_1000(p, pr):
+    return _d_beat(p, p.alone("training_length"), "on flat at 1000 steps")
+
+
+def d_best_flat(p, pr):
+    T = _one(p)
+    best = max(MATCHED, key=lambda t: T[p.flat, _ti(p, t)])
+    return f"best on flat: {best} ({f3(T[p.flat, _ti(p, best)])} BL)"
+
+
+def d_all_drop(p, pr):
+    T = _one(p)
+    worse = [t for i, t in enumerate(p.types) if _novel(p, T[:, i]) < T[p.flat, i]]
+    return f"{len(worse)} of {len(p.types)} types travel less in the novel environments"
+
+
+def d_best_novel(p, pr):
+    T = _one(p)
+    best = max(p.types, key=lambda t: _novel(p, T[:, _ti(p, t)]))
+    return (f"best across the novel environments: {best} ({f3(_novel(p, T[:, _ti(p, best)]))} BL); {WD} "
+            f"{f3(_novel(p, T[:, _ti(p, WD)]))}, agents alone {f3(_novel(p, p.alone(pr)))}")
+
+
+def d_transplant(p, pr):
+    T = _one(p)[p.flat]
+    g = lambda t: f3(T[_ti(p, t)])  # noqa: E731
+    return (f"flat: weak diverse-trained on diverse {g(WD)} / on clones {g('weak_diverse@uniform')}; weak "
+            f"uniform-trained on clones {g(WU)} / on diverse {g('weak_uniform@diverse')} BL")
+
+
+def d_strong(p, pr):
+    T = _one(p)
+    n = lambda ts: np.mean([_novel(p, T[:, _ti(p, t)]) for t in ts])  # noqa: E731
+    return f"novel mean over the weak types {f3(n(WEAK_TYPES))} BL, over the strong types {f3(n(STRONG_TYPES))} BL"
+
+
+def d_most_envs(p, pr):
+    T, a = _one(p), p.alone(pr)
+    wins = sum(1 for e in p.novel if max(WEAK_TYPES, key=lambda t: T[e, _ti(p, t)]) == WD)
+    beats = sum(1 for e in p.novel if T[e, _ti(p, WD)] > a[e])
+    return (f"{WD} best of the weak types in {wins} of {len(p.novel)} novel environments, above agents alone in "
+            f"{beats}")
+
+
+def d_vs_alone_novel(p, pr):
+    return (f"novel mean: {WD} {f3(_novel(p, _one(p)[:, _ti(p, WD)]))} BL, agents alone "
+            f"{f3(_novel(p, p.alone(pr)))} BL")
+
+
+def _welch(p, which):
+    from .analysis import stars, welch
+    a = p.a["analysis"]["dtw"]
+    pv = welch(a[WU][which], a[WD][which])[2]
+    return f"Welch p = {g3(pv)} ({stars(pv)})"
+
+
+def d_disrupted(p, pr):
+    return (f"mean DTW per step, all agents: diverse-trained {g3(p.dtw(WD, 'all')[0])} u, uniform-trained "
+            f"{g3(p.dtw(WU, 'all')[0])} u ({_welch(p, 'all')})")
+
+
+def d_worse_better(p, pr):
+    return "; ".join(f"{'diverse' if t == WD else 'uniform'}-trained: worse {g3(p.dtw(t, 'worse')[0])} u, better "
+                     f"{g3(p.dtw(t, 'better')[0])} u" for t in (WU, WD))
+
+
+def _d_dtw(which):
+    def d(p, pr):
+        return (f"{which} agents: diverse-trained {g3(p.dtw(WD, which)[0])} u vs uniform-trained "
+                f"{g3(p.dtw(WU, which)[0])} u, {_welch(p, which)}")
+    return d
+
+
+def _d_fam(col, what, diverse_more):
+    def d(p, pr):
+        fd, fu = p.familiarity(WD)[0][:, col], p.familiarity(WU)[0][:, col]
+        wins = (fd > fu) if diverse_more else (fu > fd)
+        who = "diverse" if diverse_more else "uniform"
+        return f"more {what} for the {who}-trained connector in {int(wins.sum())} of {len(fd)} novel environments"
+    return d
+
+
+def d_wind(p, pr):
+    if "wind" not in p.a["analysis"]["novel_environments"]:
+        raise KeyError("no wind environment in the familiarity results")
+    e = p.a["analysis"]["novel_environments"].index("wind")
+    fd, fu = p.familiarity(WD)[0][e], p.familiarity(WU)[0][e]
+    return (f"wind, mean states: in both: diverse-trained {fd[0]:.1f}, uniform-trained {fu[0]:.1f}; unique to training "
+            f"or wind: diverse-trained {fd[1] + fd[2]:.1f}, uniform-trained {fu[1] + fu[2]:.1f}")
+
+
+def d_scaling(p, pr):
+    s = p.scaling(None)[0]
+    return "; ".join(f"N={n}: diverse − uniform {s[i, 1] - s[i, 0]:+.2f} BL" for i, n in
+                     enumerate(p.a["scaling"]["sizes"]))
+
+
+def d_specialists(p, pr):
+    T, envs = _one(p), p.a["specialists"]["environments"]
+    best = p.specialists_best(None)[0]
+    better = [e for e, s in zip(envs, best) if T[p.envs.index(e), _ti(p, WD)] > s]
+    return (f"the generalist beats the best specialist in {len(better)} of {len(envs)} environments"
+            + (f" ({', '.join(better)})" if better else ""))
+
+
+def d_graded(p, pr):
+    main = _novel(p, _one(p)[:, _ti(p, WD)]) - _novel(p, p.alone(pr))
+    rows = [("main", main)] + [(pop, float(p.graded_gain(pop)[0])) for pop in p.a["graded"]["populations"]]
+    return "; ".join(f"{n}: pairs − alone {g:+.2f} BL" for n, g in rows)
+
+
 BL, DROP, U, ENV, SHARE = 0.5, 0.05, 0.005, 1 / 12, 0.02
 
 CLAIMS: List[Claim] = [
     Claim("C01", "M", "Trained agents travel almost 4 BL on flat", "Results, Component training", "almost four",
-          "mean 1000-step travel of the final population", "band", 0.0, "BL", ("agents",), e_fitness, band=(3.0, 4.0)),
+          "mean 1000-step travel of the final population", "band", 0.0, "BL", ("agents",), e_fitness, band=(3.0, 4.0),
+          counts=N_AGENTS, describe=d_fitness,
+          episodes=("agents-stage training episodes are not exported; the deployment alone on flat:", True, (), "flat")),
     Claim("C02", "M", "Random agents travel about 0 BL", "Results, Component training", "averaged zero",
           "mean 1000-step travel of generation 0 before any gradient step", "equivalent", BL, "BL", ("agents",),
-          e_random),
+          e_random,
+          counts=N_AGENTS, describe=d_random,
+          episodes=("generation 0's training episodes are not exported", False, (), "none")),
     Claim("C03", "M", "Deployed alone, agents are severely compromised in the novel environments",
           "Results, Component training", "about 4 → just over 2 BL", "drop(A) − 0.25", "greater", DROP, "",
-          ("deploy",), e_alone_severe, reads_alone=True),
+          ("deploy",), e_alone_severe, reads_alone=True,
+          counts=N_NOVEL, describe=d_alone_drop,
+          episodes=("", True, (), "all")),
     Claim("C04", "M", "Independent agents suffer the greatest average decrease in the novel environments",
           "Results", "Fig. 2A", "drop(A) − max over the 8 types of drop(T)", "greater", DROP, "", ("deploy",),
-          e_alone_greatest_drop, reads_alone=True),
+          e_alone_greatest_drop, reads_alone=True,
+          counts=N_NOVEL, describe=d_greatest_drop,
+          episodes=("", True, "named", "all")),
     Claim("C05", "M", "Weak diverse-trained connectors on diverse pairs suffer the least decrease", "Results",
           "Fig. 2A", "min over the other 7 types of drop(T) − drop(T wd@d)", "greater", DROP, "", ("deploy",),
-          e_wdd_least_drop),
+          e_wdd_least_drop,
+          counts=N_NOVEL, describe=d_least_drop,
+          episodes=("", False, "named", "all")),
     Claim("C06", "M", "Untrained connectors cause a severe drop in behaviour", "Results, Connector training",
           "severe (not shown)", "1 − max over kinds of untrained batch travel / agents' 1000-step travel − 0.25",
-          "greater", DROP, "", ("agents", "connectors"), e_untrained_severe),
+          "greater", DROP, "", ("agents", "connectors"), e_untrained_severe,
+          counts=N_UNTRAINED, describe=d_untrained,
+          episodes=("connector-training batches are not exported", False, (), "none")),
     Claim("C07", "M", "Trained collectives of all four kinds travel further than independent agents (flat, same "
           "episode length)", "Results, Connector training", "Fig. 2A", "min over matched types of T(flat) − A(flat)",
-          "greater", BL, "BL", ("deploy",), e_beat_alone, reads_alone=True),
+          "greater", BL, "BL", ("deploy",), e_beat_alone, reads_alone=True,
+          counts=N_DEPLOY, describe=d_beat_alone,
+          episodes=("", True, "matched", "flat")),
     Claim("C08", "M", "The same, with agents alone at their training length (1000 steps)",
           "Results, Connector training", "Fig. 2A", "min over matched types of T(flat) − A1000(flat)", "greater", BL,
-          "BL", ("deploy",), e_beat_alone_1000),
+          "BL", ("deploy",), e_beat_alone_1000,
+          counts=N_DEPLOY, describe=d_beat_alone_1000,
+          episodes=("agents alone at 1000 steps are the same episodes, read at deploy.early_step:", True, "matched", "flat")),
     Claim("C09", "M", "Weak diverse collectives achieve the best performance on flat", "Results, Connector training",
           "Fig. 2A", "T wd@d(flat) − max over the other matched types", "greater", BL, "BL", ("deploy",),
-          e_wdd_best_flat),
+          e_wdd_best_flat,
+          counts=N_DEPLOY, describe=d_best_flat,
+          episodes=("", False, "matched", "flat")),
     Claim("C10", "M", "Every collective type travels less in the novel environments", "Results, Collective deployment",
-          "Fig. 2A", "min over the 8 types of T(flat) − N(T)", "greater", BL, "BL", ("deploy",), e_all_drop),
+          "Fig. 2A", "min over the 8 types of T(flat) − N(T)", "greater", BL, "BL", ("deploy",), e_all_drop,
+          counts=N_NOVEL, describe=d_all_drop,
+          episodes=("", False, "all", "all")),
     Claim("C11", "M", "Weak diverse collectives fare best across the novel environments",
           "Results, Collective deployment", "Fig. 2A", "N(T wd@d) − max over the other 7 types", "greater", BL, "BL",
-          ("deploy",), e_wdd_best_novel),
+          ("deploy",), e_wdd_best_novel,
+          counts=N_NOVEL, describe=d_best_novel,
+          episodes=("", True, "named", "novel")),
     Claim("C12", "M", "Transplanted onto clones, diverse-trained weak connectors lose only a little", "Fig. 2B",
-          "Fig. 2B", "T wd@u(flat) − T wd@d(flat)", "noninferior", BL, "BL", ("deploy",), e_transplant_small_loss),
+          "Fig. 2B", "T wd@u(flat) − T wd@d(flat)", "noninferior", BL, "BL", ("deploy",), e_transplant_small_loss,
+          counts=N_DEPLOY, describe=d_transplant,
+          episodes=("", False, "weak", "flat")),
     Claim("C13", "M", "Diverse-trained connectors exploit diversity, uniform-trained ones cannot (kind × deployment)",
           "Fig. 2B", "Fig. 2B", "[T wd@d − T wd@u] − [T wu@d − T wu@u] (flat)", "greater", BL, "BL", ("deploy",),
-          e_transplant_interaction),
+          e_transplant_interaction,
+          counts=N_DEPLOY, describe=d_transplant,
+          episodes=("", False, "weak", "flat")),
     Claim("C14", "M", "Strong connectors deploy poorly (why Figs 2C-N drop them)", "Results, Collective deployment",
           "Fig. 2A", "mean of N(T) over weak types − over strong types", "greater", BL, "BL", ("deploy",),
-          e_strong_poor),
+          e_strong_poor,
+          counts=N_NOVEL, describe=d_strong,
+          episodes=("", False, "all", "novel")),
     Claim("C15", "M", "In most novel environments weak diverse collectives fare best of the weak types", "Figs 2C-N",
-          "most", "#(wd@d best of the weak types)/12 − 1/2", "greater", ENV, "", ("deploy",), e_wdd_most_envs),
+          "most", "#(wd@d best of the weak types)/12 − 1/2", "greater", ENV, "", ("deploy",), e_wdd_most_envs,
+          counts=N_NOVEL, describe=d_most_envs,
+          episodes=("", False, "weak", "novel")),
     Claim("C16", "M", "They fare much better than independent agents in those environments", "Figs 2C-N",
-          "Figs 2C-N", "N(T wd@d − A)", "greater", BL, "BL", ("deploy",), e_wdd_vs_alone_novel, reads_alone=True),
+          "Figs 2C-N", "N(T wd@d − A)", "greater", BL, "BL", ("deploy",), e_wdd_vs_alone_novel, reads_alone=True,
+          counts=N_NOVEL, describe=d_vs_alone_novel,
+          episodes=("", True, (WD,), "novel")),
     Claim("C17", "M", "Tethered agents in diverse collectives are disrupted more than clones in uniform ones",
-          "Fig. 3A", "Fig. 3A", "D wd@d(all) − D wu@u(all)", "greater", U, "u", ("analysis",), e_disrupted_more),
+          "Fig. 3A", "Fig. 3A", "D wd@d(all) − D wu@u(all)", "greater", U, "u", ("analysis",), e_disrupted_more,
+          counts=N_ANALYSIS, describe=d_disrupted,
+          episodes=NOT_EXPORTED_DTW),
     Claim("C18", "M", "Worse agents are altered more than better ones, for both connector types", "Fig. 3A", "Fig. 3A",
-          "min over wu@u, wd@d of D(worse) − D(better)", "greater", U, "u", ("analysis",), e_worse_altered_more),
+          "min over wu@u, wd@d of D(worse) − D(better)", "greater", U, "u", ("analysis",), e_worse_altered_more,
+          counts=N_ANALYSIS, describe=d_worse_better,
+          episodes=NOT_EXPORTED_DTW),
     Claim("C19", "M", "Diverse-trained connectors change the worse agent more than uniform-trained ones", "Fig. 3A",
-          "p < 0.001", "D wd@d(worse) − D wu@u(worse)", "greater", U, "u", ("analysis",), e_worse_changed_more),
+          "p < 0.001", "D wd@d(worse) − D wu@u(worse)", "greater", U, "u", ("analysis",), e_worse_changed_more,
+          counts=N_ANALYSIS, describe=_d_dtw("worse"),
+          episodes=NOT_EXPORTED_DTW),
     Claim("C20", "M", "Their effect on the better agents is comparable", "Fig. 3A", "same mild impact",
-          "D wd@d(better) − D wu@u(better)", "equivalent", U, "u", ("analysis",), e_better_comparable),
+          "D wd@d(better) − D wu@u(better)", "equivalent", U, "u", ("analysis",), e_better_comparable,
+          counts=N_ANALYSIS, describe=_d_dtw("better"),
+          episodes=NOT_EXPORTED_DTW),
     Claim("C21", "M", "Novel environments feel more familiar to diverse-trained connectors (more states in shared "
           "cells)", "Table S1", "9 of 12", "#(F wd@d(both) > F wu@u(both))/12 − 1/2", "greater", ENV, "",
-          ("analysis",), e_more_familiar),
+          ("analysis",), e_more_familiar,
+          counts=N_ANALYSIS, describe=_d_fam(0, "states in shared cells", True),
+          episodes=("", False, "pair", "all")),
     Claim("C22", "M", "Uniform-trained connectors meet more states exclusive to the novel environment", "Table S1",
           "9 of 12", "#(F wu@u(novel-only) > F wd@d(novel-only))/12 − 1/2", "greater", ENV, "", ("analysis",),
-          e_uniform_more_novel_only),
+          e_uniform_more_novel_only,
+          counts=N_ANALYSIS, describe=_d_fam(2, "novel-only states", False),
+          episodes=("", False, "pair", "all")),
     Claim("C23", "M", "Uniform-trained connectors meet more states exclusive to training", "Table S1", "7 of 12",
           "#(F wu@u(train-only) > F wd@d(train-only))/12 − 1/2", "greater", ENV, "", ("analysis",),
-          e_uniform_more_train_only),
+          e_uniform_more_train_only,
+          counts=N_ANALYSIS, describe=_d_fam(1, "training-only states", False),
+          episodes=("", False, "pair", "all")),
     Claim("C24", "M", "Wind feels more unfamiliar to the uniform-trained connector", "Fig. 3B-C",
           "158,118 vs 131,303 in both", "share of wind's fit in shared cells, wd@d − wu@u", "greater", SHARE, "",
-          ("analysis",), e_wind_unfamiliar),
+          ("analysis",), e_wind_unfamiliar,
+          counts=N_ANALYSIS, describe=d_wind,
+          episodes=("", False, "pair", "wind")),
     Claim("C25", "S", "The advantage of diversity grows with collective size", "Fig. 4", "Fig. 4",
           "adv(20) − adv(5), adv = N(diverse chains) − N(uniform chains)", "greater", BL, "BL", ("scaling",),
-          e_scaling_grows),
+          e_scaling_grows,
+          counts=N_SCALING, describe=d_scaling,
+          episodes=("", False, (), "chains")),
     Claim("C26", "S", "Diverse-trained connectors adapt better than uniform-trained ones in larger collectives",
-          "Fig. 4", "Fig. 4", "mean over sizes of adv", "greater", BL, "BL", ("scaling",), e_scaling_better),
+          "Fig. 4", "Fig. 4", "mean over sizes of adv", "greater", BL, "BL", ("scaling",), e_scaling_better,
+          counts=N_SCALING, describe=d_scaling,
+          episodes=("", False, (), "chains")),
     Claim("C27", "S", "Generalists sometimes beat specialists trained in the environment", "Results; Fig. S2",
           "in some cases", "max over novel e of T wd@d(e) − best specialist(e)", "greater", BL, "BL",
-          ("deploy", "specialists"), e_generalist_beats_specialist),
+          ("deploy", "specialists"), e_generalist_beats_specialist,
+          counts=N_SPECIALISTS, describe=d_specialists,
+          episodes=("", False, (WD,), "specialists")),
     Claim("C28", "S", "More sources of diversity give more resilience", "Fig. S3", "Fig. S3",
           "g(all sources) − g(same shape and springs), g = N(pairs) − N(alone)", "greater", BL, "BL",
-          ("deploy", "graded"), e_graded, reads_alone=True),
+          ("deploy", "graded"), e_graded, reads_alone=True,
+          counts=N_GRADED, describe=d_graded,
+          episodes=("graded-stage episodes are not exported; the main population's:", True, (WD,), "novel")),
 ]
 BY_ID = {c.id: c for c in CLAIMS}
 

@@ -12,7 +12,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import claims  # noqa: E402
+from divcoll_post import single_run as claims  # noqa: E402
 import summary  # noqa: E402
 
 
@@ -70,13 +70,17 @@ class SummaryTest(unittest.TestCase):
         self.assertIn("best type in the novel environments: weak_uniform@diverse (0.800 BL)", text)
 
     def test_claims_follow_the_numbers_and_missing_stages_are_not_measured(self):
-        got = {text: (number, v) for text, number, v, _ in claims.claims(self.path)}
+        got = {c.text: (number, v) for c, number, v, _ in claims.claims(self.path)}
         by_start = lambda s: next(v for k, v in got.items() if k.startswith(s))  # noqa: E731
-        # weak_uniform@uniform (2.0 BL) beats agents alone (1.0 BL, the nan episode left out) on flat
-        number, v = by_start("Trained collectives of all four kinds")
-        self.assertEqual(v, "held")
-        self.assertIn("weak_uniform@uniform 2.00", number)
-        self.assertIn("agents alone 1.00", number)
+        # C03: agents alone drop from 1.0 BL on flat (the nan episode left out) to (0.5 + 0.1) / 2 in the novel ones
+        number, v = by_start("Deployed alone, agents are severely compromised")
+        self.assertEqual(v, "too small to judge")  # held, but three environments are fewer than the claim needs
+        self.assertEqual(next(n for c, _, _, n in claims.claims(self.path) if c.id == "C03"),
+                         "short: environments 3 (needs ≥ 7)")
+        self.assertIn("agents alone 70%", number)
+        self.assertIn("effect +0.45", number)
+        # C07 compares the four kinds deployed as trained: this run has two types only
+        self.assertEqual(by_start("Trained collectives of all four kinds")[1], "not measured")
         self.assertEqual(by_start("Trained agents travel")[1], "not measured")  # no agents stage in the file
         self.assertEqual(by_start("The advantage of diversity grows")[1], "not measured")
 
@@ -89,12 +93,12 @@ class SummaryTest(unittest.TestCase):
 
     def test_a_claim_from_a_nan_is_not_measured(self):
         with h5py.File(self.path, "r+") as f:
-            c = f["deploy/collectives/travel_bl"][()]
-            c[0, 0] = np.nan  # every flat episode of weak_uniform@uniform: its flat mean is NaN
-            f["deploy/collectives/travel_bl"][...] = c
-        got = {text: (number, v) for text, number, v, _ in claims.claims(self.path)}
-        number, v = next(val for k, val in got.items() if k.startswith("Trained collectives of all four kinds"))
-        self.assertIn("weak_uniform@uniform —", number)
+            a = f["deploy/agents/travel_bl"][()]
+            a[0] = np.nan  # every flat episode of agents alone: their flat mean is NaN
+            f["deploy/agents/travel_bl"][...] = a
+        got = {c.text: (number, v) for c, number, v, _ in claims.claims(self.path)}
+        number, v = next(val for k, val in got.items() if k.startswith("Deployed alone, agents are severely"))
+        self.assertIn("nan", number)
         self.assertEqual(v, "not measured")
 
     def test_ok_mean_of_nothing_is_nan_not_zero(self):
@@ -109,8 +113,8 @@ class SmallRunTest(SummaryTest):
     config = QUICK
 
     def test_claims_follow_the_numbers_and_missing_stages_are_not_measured(self):
-        got = {text: (v, needs) for text, _, v, needs in claims.claims(self.path)}
-        v, needs = next(val for k, val in got.items() if k.startswith("Trained collectives of all four kinds"))
+        got = {c.text: (v, needs) for c, _, v, needs in claims.claims(self.path)}
+        v, needs = next(val for k, val in got.items() if k.startswith("Deployed alone, agents are severely"))
         self.assertEqual(v, "too small to judge")
         self.assertIn("agents 24 (needs ≥ 50)", needs)
         self.assertIn("connector replicates 2 (needs ≥ 5)", needs)

@@ -91,38 +91,41 @@ echo "== the robustness page"
 import os, sys
 sys.path.insert(0, sys.argv[1])
 import h5py, numpy as np
-import claims, robustness, summary
+import robustness
+from divcoll_post import verdicts as V
 table = open(sys.argv[2]).read().split("## Claims × variants")[1].split("## Effects")[0]
 header = [l for l in table.splitlines() if l.startswith("| claim |")][0]
 cols = [c.strip() for c in header.strip().strip("|").split("|")][1:]
 # each variant, then its runs read under the report-time protocols (tiny.toml records deploy.early_step)
 want = [f"{v}{r}" for v in ["baseline", "long_deploy"] for r in ["", " · training_length", " · training_rate"]]
 assert cols == want, cols
+names = {f"**{c.id}** {c.text}": c for c in V.CLAIMS}
 rows = {}
 for line in table.splitlines():
     cells = [c.strip() for c in line.strip().strip("|").split("|")]
-    if len(cells) == 1 + len(cols) and cells[0] in [t for t, _ in claims.CLAIMS]:
+    if len(cells) == 1 + len(cols) and cells[0] in names:
         rows[cells[0]] = cells[1:]
-missing = [t for t, _ in claims.CLAIMS if t not in rows]
+missing = [t for t in names if t not in rows]
 assert not missing, f"claims without a row: {missing}"
-alone_claims = {t for t, fn in claims.CLAIMS if fn in robustness.ALONE_CLAIMS}
 for t, cells in rows.items():
     for col, c in zip(cols, cells):
         # two seeds: every measured cell is "too few seeds", never a verdict; a reading re-evaluates only the
         # claims that read agents alone
-        if "·" in col and t not in alone_claims:
+        if "·" in col and not names[t].reads_alone:
             assert c == "as source", (t, col, c)
         else:
             assert c == "not measured" or c.endswith("**too few seeds**"), (t, col, c)
 measured = sum(c.endswith("**too few seeds**") for cs in rows.values() for c in cs)
 assert measured >= 2 * 12, f"only {measured} measured cells"
 # the readings: agents alone at deploy.early_step, and the deployment travel scaled to the training length
-run = claims.Run(os.path.join(sys.argv[3], "baseline/seed1.h5"))
-cfg = claims.config(run.path)
-with h5py.File(run.path, "r") as f:
-    early = summary.env_means(f["deploy/agents/travel_bl_early"][()], f["deploy/agents/status"][()])[0]
-np.testing.assert_array_equal(robustness.reread(run, "training_length").alone, early)
-np.testing.assert_allclose(robustness.reread(run, "training_rate").alone,
+path = os.path.join(sys.argv[3], "baseline/seed1.h5")
+run = robustness.SummaryRun(robustness.write_summary(path))
+cfg = run.config
+with h5py.File(path, "r") as f:
+    t, st = f["deploy/agents/travel_bl_early"][()], f["deploy/agents/status"][()]
+    early = np.array([t[e][(st[e] == 0) & np.isfinite(t[e])].mean() for e in range(t.shape[0])])
+np.testing.assert_allclose(run.reread("training_length").alone, early, rtol=1e-12)
+np.testing.assert_allclose(run.reread("training_rate").alone,
                            run.alone * cfg["connectors"]["episode_steps"] / cfg["deploy"]["episode_steps"], rtol=1e-12)
 assert not np.array_equal(early, run.alone)
 print(f"{len(rows)} claims x {len(cols)} columns, {measured} cells measured; readings checked")
