@@ -107,7 +107,7 @@ class MpiDriver final : public stages::Driver {
   int rank_ = 0;
 };
 
-// a stage of the stage list (stages::kStages) with its runner on `comm` (every rank calls it)
+// a stage's runner (stages/driver.hpp: run_<name>_stage) on `comm`, with an MpiDriver (every rank calls it)
 using StageRunner = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
 template <void (*run)(stages::Driver&)>
 void run_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint) {
