@@ -342,11 +342,6 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   }
 }
 
-bool complete(const io::h5::Node& file, const std::string& group) {
-  return file.has(group) && file.group(group).has_attribute("status") &&
-         file.group(group).read_string("status") == "complete";
-}
-
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
                      const std::function<void()>& body) {
   if (complete(file, group)) return false;
@@ -356,6 +351,21 @@ bool run_with_status(io::h5::File& file, const std::string& group, const std::fu
   file.group(group).write_string("status", "complete");
   checkpoint();
   return true;
+}
+
+MpiDriver::MpiDriver(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint)
+    : comm_(comm), cfg_(cfg), file_(file), checkpoint_(checkpoint) {
+  MPI_Comm_rank(comm, &rank_);
+}
+
+void MpiDriver::drive(Plan& plan) { mpi::drive(comm_, cfg_, file_, plan, checkpoint_); }
+
+std::string MpiDriver::broadcast(const std::string& bytes) { return mpi::broadcast(comm_, bytes); }
+
+void MpiDriver::write(const Records& records) { write_records(comm_, file_, records); }
+
+bool MpiDriver::with_status(const std::string& group, const std::function<void()>& body) {
+  return run_with_status(file_, group, checkpoint_, body);
 }
 
 }  // namespace divcoll::mpi

@@ -1,4 +1,4 @@
-// the one driver: runs any stage's plan (mpi/plan.hpp) over the ranks.
+// the one driver: runs any stage's plan (stages/plan.hpp) over the ranks.
 //
 // It owns what every stage shares: the round counter and resume, the task farm (mpi/scheduler.hpp) and the
 // gathering of results in item order, writing the plan's rows (every rank takes part in each write: parallel
@@ -26,9 +26,17 @@
 #include "config/config.hpp"
 #include "io/h5.hpp"
 #include "config/pipeline.hpp"
-#include "mpi/plan.hpp"
+#include "stages/driver.hpp"
+#include "stages/plan.hpp"
 
 namespace divcoll::mpi {
+
+using stages::Attribute;
+using stages::complete;
+using stages::Plan;
+using stages::Record;
+using stages::Records;
+using stages::StoredState;
 
 // a plan's independent rounds (Plan::Info::independent_rounds) are farmed together until a farm has this many
 // items per rank: a farm's tail costs each rank about half an item, under 2% of a farm of 32 items per rank
@@ -59,8 +67,6 @@ DriverClock& driver_clock();
 // writer of status; every rank calls it
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
                      const std::function<void()>& body);
-// whether `group`'s status is "complete" (every rank reads)
-bool complete(const io::h5::Node& file, const std::string& group);
 
 // records waiting to be written (the driver's rounds between copies): one record per dataset, its rows in the
 // order they came, a row that comes again replacing its values
@@ -80,21 +86,41 @@ class RecordQueue {
 void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& records);
 
 // ---- the stages ----------------------------------------------------------------------------------------
-// every stage's runner, declared from the one stage list (config/pipeline.hpp DIVCOLL_STAGES) and defined beside
-// the stage's plans: run_<name>_stage reads the stage's inputs from the run file, builds its plans and
-// drive()s them (every rank calls it)
+// the runners' driver (stages/driver.hpp) over the ranks of `comm`: drive(), broadcast(), write_records() and
+// run_with_status() above
+class MpiDriver final : public stages::Driver {
+ public:
+  MpiDriver(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint);
+  const io::RunConfig& config() const override { return cfg_; }
+  io::h5::File& file() const override { return file_; }
+  bool master() const override { return rank_ == 0; }
+  void drive(Plan& plan) override;
+  std::string broadcast(const std::string& bytes) override;
+  void write(const Records& records) override;
+  bool with_status(const std::string& group, const std::function<void()>& body) override;
+
+ private:
+  MPI_Comm comm_;
+  const io::RunConfig& cfg_;
+  io::h5::File& file_;
+  const std::function<void()>& checkpoint_;
+  int rank_ = 0;
+};
+
+// a stage's runner (stages/driver.hpp: run_<name>_stage) on `comm`, with an MpiDriver (every rank calls it)
 using StageRunner = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
-#define DIVCOLL_STAGE_RUNNER(name, stream, reads) \
-  void run_##name##_stage(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
-DIVCOLL_STAGES(DIVCOLL_STAGE_RUNNER)
-#undef DIVCOLL_STAGE_RUNNER
+template <void (*run)(stages::Driver&)>
+void run_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint) {
+  MpiDriver driver(comm, cfg, file, checkpoint);
+  run(driver);
+}
 
 struct Stage {
   io::StageInfo info;
   StageRunner run;
 };
 // the stages in the order they run
-#define DIVCOLL_STAGE(name, stream, reads) Stage{{#name, stream, reads}, run_##name##_stage},
+#define DIVCOLL_STAGE(name, stream, reads) Stage{{#name, stream, reads}, run_stage<stages::run_##name##_stage>},
 inline const std::array kStages = {DIVCOLL_STAGES(DIVCOLL_STAGE)};
 #undef DIVCOLL_STAGE
 

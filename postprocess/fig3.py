@@ -4,7 +4,7 @@
     /usr/bin/python3 postprocess/fig3.py RUN.h5 [--out DIR] [--dpi 150] [--env wind] [--replicate 0]
                                               [--boot 1000] [--boot-seed 0]
 
-Reads /analysis of a divcoll run file (mpi/analysis_stage.hpp) and writes DIR/fig3_adversity_familiarity.png
+Reads /analysis of a divcoll run file (src/stages/analysis.hpp) and writes DIR/fig3_adversity_familiarity.png
 and .pdf (DIR defaults to out/figures). Two connector types, both weak and deployed as trained: uniform-trained
 on clones (orange, hatched, dashed outline, as in fig2.py) and diverse-trained on diverse pairs (blue, solid).
 

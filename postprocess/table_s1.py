@@ -3,7 +3,7 @@
 
     /usr/bin/python3 postprocess/table_s1.py RUN.h5 [--out DIR]
 
-Reads /analysis/familiarity of a divcoll run file (mpi/analysis_stage.hpp) and writes DIR/table_s1.md (DIR
+Reads /analysis/familiarity of a divcoll run file (src/stages/analysis.hpp) and writes DIR/table_s1.md (DIR
 defaults to out/figures); prints its path. One row per novel environment. For each connector replicate and
 environment one PaCMAP fit embeds the hidden states recorded in flat (training) and in that environment; the
 coordinates are rounded half to even into unit cells and every state is counted as lying in a cell that holds

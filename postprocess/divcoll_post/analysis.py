@@ -1,7 +1,7 @@
 """Read-only access to the analysis stage of a divcoll run file (SPEC §8: DTW adversity, PaCMAP familiarity)
 and the Python side of its statistics. Used by fig3.py, table_s1.py, summary.py and verdicts.py.
 
-Layout read here (mpi/analysis_stage.hpp):
+Layout read here (src/stages/analysis.hpp):
 
     /analysis   attributes status, types ("weak_uniform@uniform,weak_diverse@diverse"), environments (13, flat
                 first), novel_environments (12), dtw_envs_done, familiarity_envs_done; string lists are

@@ -31,7 +31,7 @@ int size_of(MPI_Comm c = MPI_COMM_WORLD) {
   return s;
 }
 
-// pack and unpack (mpi/protocol.hpp): a payload is read where it lies, also from inside a larger buffer
+// pack and unpack (stages/payload.hpp): a payload is read where it lies, also from inside a larger buffer
 // (as the master reads a block's results), and the bytes do not depend on how the stream was written
 TEST(Protocol, PackUnpackRoundTripInPlace) {
   const std::vector<double> g = {1.5, -0.0, 3e-300, std::numeric_limits<double>::quiet_NaN(), 7.25};

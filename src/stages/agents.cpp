@@ -1,4 +1,4 @@
-#include "mpi/agents_stage.hpp"
+#include "stages/agents.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -9,10 +9,9 @@
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "morph/body.hpp"
-#include "mpi/protocol.hpp"
-#include "mpi/driver.hpp"
+#include "stages/payload.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 namespace {
 
 constexpr int M11 = sim::kAgentMasses, S21 = sim::kAgentSprings;
@@ -77,18 +76,12 @@ void serialize(Ar& ar, Trained& t, unsigned) {
   ar & t.x & t.train_s;
 }
 
-std::string gen_name(const std::string& group, int g) {
-  char b[32];
-  std::snprintf(b, sizeof b, "/gen_%03d", g);
-  return group + b;
-}
-
 // the agents stage (SPEC §4) as a plan: one round per generation (0 .. agents.generations), one item per
 // agent trained (created or mutated on the master); the master's selection is the round's reduction
 class AgentsPlan final : public Plan {
  public:
-  AgentsPlan(const io::RunConfig& cfg, const AgentsSpec& spec, std::vector<evo::Individual> population)
-      : cfg_(cfg), A_(cfg.agents), spec_(spec), P_(A_.population), population_(std::move(population)) {
+  AgentsPlan(const AgentsDef& def, const AgentsSpec& spec, std::vector<evo::Individual> population)
+      : def_(def), A_(def_.agents), spec_(spec), P_(A_.population), population_(std::move(population)) {
     gd_.epochs = A_.epochs;
     gd_.steps = A_.episode_steps;
     gd_.rule = evo::gd_rule_from(A_.gd_rule);
@@ -112,7 +105,7 @@ class AgentsPlan final : public Plan {
   std::vector<std::string> items(int g) override {
     std::vector<std::string> tasks;
     for (int i = 0; i < P_; ++i) {
-      Rng rng = make_rng(cfg_.run.seed, spec_.stream + g, i);
+      Rng rng = make_rng(def_.seed, spec_.stream + g, i);
       evo::Individual x;
       if (g == 0) {
         x.agent = spec_.fixed_cells ? collective::make_agent(spec_.fixed_cells,
@@ -203,7 +196,7 @@ class AgentsPlan final : public Plan {
   }
 
  private:
-  const io::RunConfig& cfg_;
+  const AgentsDef def_;
   const io::RunConfig::Agents& A_;
   const AgentsSpec spec_;
   const int P_;
@@ -218,17 +211,25 @@ class AgentsPlan final : public Plan {
 
 }  // namespace
 
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint) {
-  run_agents_stage(comm, cfg, file, checkpoint, AgentsSpec{});
+std::string gen_name(const std::string& group, int g) {
+  char b[32];
+  std::snprintf(b, sizeof b, "/gen_%03d", g);
+  return group + b;
 }
 
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint, const AgentsSpec& spec) {
+AgentsDef agents_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.agents}; }
+
+std::unique_ptr<Plan> make_agents_plan(const AgentsDef& def, const AgentsSpec& spec,
+                                       std::vector<evo::Individual> population) {
+  return std::make_unique<AgentsPlan>(def, spec, std::move(population));
+}
+
+void run_agents_stage(Driver& driver) { run_agents(driver, agents_def(driver.config()), AgentsSpec{}); }
+
+void run_agents(Driver& driver, const AgentsDef& def, const AgentsSpec& spec) {
+  io::h5::File& file = driver.file();
   const std::string& G = spec.group;
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const auto& A = cfg.agents;
+  const auto& A = def.agents;
   const int P = A.population;
   // the committed generations; one that was being written when the run stopped is dropped and redone
   const int64_t done = file.has(G) && file.group(G).has_attribute("generations_done")
@@ -249,10 +250,10 @@ void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
                          file.file() << ": generation " << done - 1 << " has " << population.size()
                                      << " survivors, not agents.population = " << P
                                      << " (was the run started with another config?)");
-    if (rank != 0) population.clear();
+    if (!driver.master()) population.clear();
   }
-  AgentsPlan plan(cfg, spec, std::move(population));
-  drive(comm, cfg, file, plan, checkpoint);
+  AgentsPlan plan(def, spec, std::move(population));
+  driver.drive(plan);
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::stages

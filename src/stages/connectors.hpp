@@ -13,27 +13,27 @@
 //   anchors            (P × 4)     each agent's back foot, front foot, back upper, front upper (§6.1), stored once
 #pragma once
 
-#include <mpi.h>
-
-#include <functional>
+#include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "collective/builders.hpp"
 #include "config/config.hpp"
-#include "io/h5.hpp"
 #include "config/pipeline.hpp"
+#include "io/h5.hpp"
+#include "stages/driver.hpp"
+#include "stages/plan.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 
 inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
 // the final agent population of the run file on every rank, with its anchors: the stored ones
 // (io::anchors_path: connectors/anchors, graded/<name>/connectors/anchors) once its connector training stored
 // them, otherwise computed (deterministically)
-std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file,
-                                               const std::string& group = "agents");
+std::vector<collective::Agent> load_population(const io::h5::Node& file, const std::string& group = "agents");
 // stores the anchors of `agents` (the population of `group`) once, at io::anchors_path(group)
-void store_anchors(MPI_Comm comm, const io::h5::File& file, const std::string& group,
-                   const std::vector<collective::Agent>& agents);
+void store_anchors(Driver& driver, const std::string& group, const std::vector<collective::Agent>& agents);
 
 // one connector being trained: its springs, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its
@@ -52,13 +52,30 @@ struct TrainSpec {
   int iterations = 0, batch_pairs = 0, episode_steps = 0;
 };
 
-// trains every slot in lock-step: the connectors plan (mpi/connectors_plan.cpp; the plain one, or the
-// extended one when any of issue 9.2's keys asks for it) run by the driver (mpi/driver.hpp), resuming from
-// the state group's committed state; returns the trained weights on every rank
-std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                                                  const std::vector<collective::Agent>& agents,
-                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
-                                                  const std::function<void()>& checkpoint);
+// the config values connector training reads: the run's seed and the [connectors] section
+struct ConnectorsDef {
+  uint64_t seed = 0;
+  io::RunConfig::Connectors connectors;
+};
+ConnectorsDef connectors_def(const io::RunConfig& cfg);
+
+// connector training as a plan: every slot in lock-step, one round per iteration, one item per pair episode.
+// The plain plan (Adam or a normalized step on the summed gradient) or, when any of the optimisation keys
+// (evo/connector_opt.hpp) differs from its default, the extended one. It keeps references to `agents` and
+// `slots`, which must outlive it
+class ConnectorsPlan : public Plan {
+ public:
+  // master: the trained weights, one vector per slot, once finished
+  virtual std::vector<std::vector<double>> weights() const = 0;
+};
+std::unique_ptr<ConnectorsPlan> make_connectors_plan(const ConnectorsDef& def,
+                                                     const std::vector<collective::Agent>& agents,
+                                                     const std::vector<ConnectorSlot>& slots, const TrainSpec& spec);
+
+// trains every slot in lock-step (make_connectors_plan, driven), resuming from the state group's committed
+// state; returns the trained weights on every rank
+std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<collective::Agent>& agents,
+                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec);
 
 // the slots' groups in first-appearance order, with their column counts
 struct SlotGroups {
@@ -67,4 +84,4 @@ struct SlotGroups {
 };
 SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots);
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::stages

@@ -12,22 +12,21 @@
 //     curve_u (M×(epochs+1): travel at each evaluation of this generation's training; NaN for parents)
 //   final/      the surviving population after the last generation (same datasets, P rows), which the
 //               later stages read
-// Rows are written by the rank that trained them; the master writes the rest (parallel HDF5).
-// A generation is a checkpoint: --resume continues after the last complete one, bit-identically.
+// A generation is a round of the plan: --resume continues after the last committed one, bit-identically.
 #pragma once
 
-#include <mpi.h>
-
-#include <functional>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
-#include "evo/evolution.hpp"
 #include "config/config.hpp"
-#include "io/h5.hpp"
 #include "config/pipeline.hpp"
+#include "evo/evolution.hpp"
+#include "stages/driver.hpp"
+#include "stages/plan.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
 inline constexpr uint64_t kAgentsStage = io::stage_stream("agents");
@@ -41,10 +40,24 @@ struct AgentsSpec {
   uint32_t fixed_springs = 0;          // ... and these springs (0: random springs)
   bool spring_descriptor = false;      // uniqueness on the spring-dependent descriptor entries
 };
-void run_agents_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint, const AgentsSpec& spec);
+// the config values the agents plan reads: the run's seed and the [agents] section
+struct AgentsDef {
+  uint64_t seed = 0;
+  io::RunConfig::Agents agents;
+};
+AgentsDef agents_def(const io::RunConfig& cfg);
 
-// runs (or resumes) the stage on `comm`; rank 0 prints progress. Every rank calls it. `checkpoint` is
-// called (collectively) after every output.checkpoint_every generations and at the end of the stage.
+// the stage as a plan: one round per generation (0 .. agents.generations), one item per agent trained (created
+// or mutated on the master); the master's selection is the round's reduction, and finish() records the final
+// population. `population`: the master's survivors of the last committed generation (empty for a new run and on
+// the other ranks)
+std::unique_ptr<Plan> make_agents_plan(const AgentsDef& def, const AgentsSpec& spec,
+                                       std::vector<evo::Individual> population);
 
-}  // namespace divcoll::mpi
+// the name of generation g's group: <group>/gen_NNN
+std::string gen_name(const std::string& group, int g);
+
+// runs (or resumes) one population's evolution into spec.group (the agents stage's runner with the defaults)
+void run_agents(Driver& driver, const AgentsDef& def, const AgentsSpec& spec);
+
+}  // namespace divcoll::stages

@@ -1,4 +1,4 @@
-// connector training as a plan (mpi/plan.hpp): every slot (a connector being trained) in lock-step, one round
+// connector training as a plan (stages/plan.hpp): every slot (a connector being trained) in lock-step, one round
 // per iteration, one item per pair episode. Two plans: the plain one (Adam or a normalized step on the
 // summed gradient) and, when any of issue 9.2's optimisation keys differs from its default, the extended
 // one (collective::ConnectorOptimizer: decaying rate, keep-best on a validation batch, truncated
@@ -10,22 +10,25 @@
 //   state/params, adam_m, adam_v          (N × P_c)       the committed optimizer state
 // extended, with keep_best: <group>/val_bl ((I+1) × columns), <group>/best_iteration (columns), and in the
 // state best_params (N × P_c), best (N × 2), es_fitness (N × I·popsize, cmaes)
+#include "stages/connectors.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <numeric>
 
+#include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "common/check.hpp"
 #include "evo/connector_opt.hpp"
 #include "evo/optim.hpp"
 #include "io/run_read.hpp"
 #include "morph/body.hpp"
-#include "mpi/connectors_stage.hpp"
-#include "mpi/driver.hpp"
-#include "mpi/protocol.hpp"
+#include "stages/payload.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -64,30 +67,28 @@ Records& operator+=(Records& a, Records b) {
 }
 
 // what both plans share
-class ConnectorsPlan : public Plan {
+class LockstepPlan : public ConnectorsPlan {
  public:
-  ConnectorsPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
-                 const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
-      : cfg_(cfg), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
+  LockstepPlan(const ConnectorsDef& def, const std::vector<collective::Agent>& agents,
+               const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
+      : def_(def), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
         N_(static_cast<int>(slots.size())), B_(spec.batch_pairs), I_(spec.iterations),
         pop_(static_cast<int>(agents.size())), Pc_(sim::connector_param_count()), sg_(spec.state_group + "/state/") {}
 
   Info info() const override { return {spec_.label, spec_.state_group, "iterations_done", "iteration", "pair-episodes"}; }
   int rounds() const override { return I_; }
   void take_input(int, const std::string& input) override { weights_ = unpack<std::vector<double>>(input); }
-  // master: the trained weights, once finished
-  virtual std::vector<std::vector<double>> weights() const = 0;
 
  protected:
   // slot c's batch of iteration it: uniform slots pair agent i with its clone, diverse ones draw fresh pairs
   std::vector<std::pair<int, int>> batch(int c, int it) const {
     if (!slots_[c].diverse) return collective::uniform_pairs(B_);
-    Rng rng = make_rng(cfg_.run.seed, slots_[c].stream, it);
+    Rng rng = make_rng(def_.seed, slots_[c].stream, it);
     return collective::random_pairs(rng, pop_, B_);
   }
   std::vector<double> initial_weights(int c) const {
-    Rng rng = make_rng(cfg_.run.seed, slots_[c].stream, 1000000);
-    return morph::init_connector_params(rng, cfg_.connectors.init_out_gain);
+    Rng rng = make_rng(def_.seed, slots_[c].stream, 1000000);
+    return morph::init_connector_params(rng, def_.connectors.init_out_gain);
   }
   // one pair episode of weight vector t.weights of the round's weights_
   PairDone episode(const PairTask& t, const sim::RunOptions& ro) {
@@ -147,7 +148,7 @@ class ConnectorsPlan : public Plan {
     return out;
   }
 
-  const io::RunConfig& cfg_;
+  const ConnectorsDef def_;
   const std::vector<collective::Agent>& agents_;
   const std::vector<ConnectorSlot>& slots_;
   const TrainSpec spec_;
@@ -159,9 +160,9 @@ class ConnectorsPlan : public Plan {
 };
 
 // the plain method: each slot's gradients summed in pair order, then one Adam (or normalized) step
-class PlainConnectorsPlan final : public ConnectorsPlan {
+class PlainConnectorsPlan final : public LockstepPlan {
  public:
-  using ConnectorsPlan::ConnectorsPlan;
+  using LockstepPlan::LockstepPlan;
   std::vector<std::string> state_paths() const override { return {sg_ + "params", sg_ + "adam_m", sg_ + "adam_v"}; }
   void start(int done, const StoredState& s) override {
     params_.resize(N_);
@@ -190,7 +191,7 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
       for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
     cu_.assign(N_, kNaN), cb_.assign(N_, kNaN), nn_.assign(N_, 0);
     collective::ProbeSum empty;
-    empty.pair_clip = collective::pair_clip(collective::opt_settings(cfg_.connectors));  // connectors.clip
+    empty.pair_clip = collective::pair_clip(collective::opt_settings(def_.connectors));  // connectors.clip
     sums_.assign(N_, empty);
     return items;
   }
@@ -206,7 +207,7 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     sums_[static_cast<size_t>(i / B_)].add(outcome(unpack<PairDone>(bytes)));
   }
   Records end_round(int it) override {
-    const auto& C = cfg_.connectors;
+    const auto& C = def_.connectors;
     for (int c = 0; c < N_; ++c) {
       collective::ProbeResult r = sums_[c].mean();
       nn_[c] = r.not_ok;
@@ -250,11 +251,11 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
 // the optimisation keys of issue 9.2: ask/tell optimizers, each probe a weight vector on a batch; with
 // keep_best each slot's current weights also run its fixed validation batch, and a closing round scores
 // the final weights
-class ExtendedConnectorsPlan final : public ConnectorsPlan {
+class ExtendedConnectorsPlan final : public LockstepPlan {
  public:
-  ExtendedConnectorsPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+  ExtendedConnectorsPlan(const ConnectorsDef& def, const std::vector<collective::Agent>& agents,
                          const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
-      : ConnectorsPlan(cfg, agents, slots, spec), os_(collective::opt_settings(cfg.connectors)),
+      : LockstepPlan(def, agents, slots, spec), os_(collective::opt_settings(def.connectors)),
         es_(os_.optimizer == "cmaes"), E_(static_cast<size_t>(spec.iterations) * os_.es_popsize) {}
 
   bool closing_round() const override { return os_.keep_best; }
@@ -265,11 +266,11 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
     return p;
   }
   void start(int done, const StoredState& s) override {
-    for (int c = 0; c < N_; ++c) opt_.emplace_back(os_, initial_weights(c), I_, cfg_.run.seed, slots_[c].stream);
+    for (int c = 0; c < N_; ++c) opt_.emplace_back(os_, initial_weights(c), I_, def_.seed, slots_[c].stream);
     if (os_.keep_best)
       for (int c = 0; c < N_; ++c)
-        val_.push_back(collective::validation_pairs(slots_[c].diverse, cfg_.connectors.validation_pairs, B_, pop_,
-                                                    cfg_.run.seed, slots_[c].stream));
+        val_.push_back(collective::validation_pairs(slots_[c].diverse, def_.connectors.validation_pairs, B_, pop_,
+                                                    def_.seed, slots_[c].stream));
     if (done == 0) return;
     auto row = [&](const std::string& name, int c, size_t w) {
       const std::vector<double>& x = s.at(sg_ + name);
@@ -420,20 +421,70 @@ SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots) {
   return g;
 }
 
-std::vector<std::vector<double>> train_connectors(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                                                  const std::vector<collective::Agent>& agents,
-                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec,
-                                                  const std::function<void()>& checkpoint) {
-  std::unique_ptr<ConnectorsPlan> plan;
-  if (collective::extended(collective::opt_settings(cfg.connectors)))
-    plan = std::make_unique<ExtendedConnectorsPlan>(cfg, agents, slots, spec);
-  else
-    plan = std::make_unique<PlainConnectorsPlan>(cfg, agents, slots, spec);
-  drive(comm, cfg, file, *plan, checkpoint);
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  // every rank gets the trained weights
-  return broadcast(comm, rank == 0 ? plan->weights() : std::vector<std::vector<double>>{});
+ConnectorsDef connectors_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.connectors}; }
+
+std::unique_ptr<ConnectorsPlan> make_connectors_plan(const ConnectorsDef& def,
+                                                     const std::vector<collective::Agent>& agents,
+                                                     const std::vector<ConnectorSlot>& slots, const TrainSpec& spec) {
+  if (collective::extended(collective::opt_settings(def.connectors)))
+    return std::make_unique<ExtendedConnectorsPlan>(def, agents, slots, spec);
+  return std::make_unique<PlainConnectorsPlan>(def, agents, slots, spec);
 }
 
-}  // namespace divcoll::mpi
+std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<collective::Agent>& agents,
+                                                  const std::vector<ConnectorSlot>& slots, const TrainSpec& spec) {
+  const std::unique_ptr<ConnectorsPlan> plan = make_connectors_plan(connectors_def(driver.config()), agents, slots, spec);
+  driver.drive(*plan);
+  // every rank gets the trained weights
+  return broadcast(driver, driver.master() ? plan->weights() : std::vector<std::vector<double>>{});
+}
+
+std::vector<collective::Agent> load_population(const io::h5::Node& file, const std::string& group) {
+  // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
+  // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
+  const std::string at = io::anchors_path(group);
+  const bool stored = file.has(at);
+  // every rank reads (a read made by one rank alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp)
+  std::vector<collective::Agent> agents;
+  for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
+  if (stored) io::read_anchors(file, at, agents);
+  // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
+  if (!stored)
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+  return agents;
+}
+
+void store_anchors(Driver& driver, const std::string& group, const std::vector<collective::Agent>& agents) {
+  const io::h5::File& file = driver.file();
+  const std::string at = io::anchors_path(group);
+  if (file.has(at)) return;
+  std::vector<int64_t> rows(agents.size());
+  std::iota(rows.begin(), rows.end(), 0);
+  if (!driver.master()) rows.clear();
+  file.write_rows<int32_t>(at, {static_cast<hsize_t>(agents.size()), 4}, rows,
+                           driver.master() ? io::anchors_rows(agents) : std::vector<int32_t>{});
+}
+
+void run_connectors_stage(Driver& driver) {
+  const io::RunConfig& cfg = driver.config();
+  io::h5::File& file = driver.file();
+  const auto& C = cfg.connectors;
+  const std::vector<std::string>& kinds = C.kinds;
+  const int K = static_cast<int>(kinds.size()), R = C.replicates;
+  const std::vector<collective::Agent> agents = load_population(file);
+
+  io::h5::Node stage = file.group("connectors");
+  stage.write_string("kinds", io::join(kinds));
+  stage.write_int("replicates", R);
+  store_anchors(driver, "agents", agents);
+  // connector c = kind·R + replicate, trained on flat
+  std::vector<ConnectorSlot> slots;
+  for (int k = 0; k < K; ++k)
+    for (int r = 0; r < R; ++r)
+      slots.push_back({collective::tether(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
+                       "connectors/" + kinds[k], r});
+  TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
+  train_connectors(driver, agents, slots, spec);
+}
+
+}  // namespace divcoll::stages

@@ -1,4 +1,4 @@
-#include "mpi/deploy_stage.hpp"
+#include "stages/deploy.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,11 +9,11 @@
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
-#include "mpi/connectors_stage.hpp"
-#include "mpi/driver.hpp"
-#include "mpi/protocol.hpp"
+#include "stages/connectors.hpp"
+#include "stages/driver.hpp"
+#include "stages/payload.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 namespace {
 
 // one episode: an agent alone (type = −1) or a pair of a collective type
@@ -41,10 +41,9 @@ void serialize(Ar& ar, DeployDone& d, unsigned) {
 // then every collective type × replicate × pair); the rows of round e are row e of every dataset
 class DeployPlan final : public Plan {
  public:
-  DeployPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, std::vector<std::string> types,
-             std::vector<std::vector<std::vector<double>>> weights, std::vector<collective::Tether> tethers, std::vector<bool> diverse)
-      : cfg_(cfg), D_(cfg.deploy), agents_(agents), types_(std::move(types)), weights_(std::move(weights)),
-        tethers_(std::move(tethers)), diverse_(std::move(diverse)), E_(static_cast<int>(D_.environments.size())),
+  DeployPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, DeployTypes types)
+      : cfg_(cfg), D_(cfg.deploy), agents_(agents), types_(std::move(types.names)), weights_(std::move(types.weights)),
+        tethers_(std::move(types.tethers)), diverse_(std::move(types.diverse)), E_(static_cast<int>(D_.environments.size())),
         NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(cfg.connectors.replicates),
         T_(static_cast<int>(types_.size())), per_episode_(D_.episode_steps * 5),
         K_(D_.hidden_subsample == 0 ? per_episode_ : std::min(per_episode_, (D_.hidden_subsample + NP_ - 1) / NP_)),
@@ -60,7 +59,7 @@ class DeployPlan final : public Plan {
   Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
-    return {{"environments", join(D_.environments)}, {"types", join(types_)}};
+    return {{"environments", io::join(D_.environments)}, {"types", io::join(types_)}};
   }
   Records setup() override {
     Record r{"deploy/diverse_pairs", {static_cast<uint64_t>(NP_), 2}, {}, std::vector<int32_t>{}};
@@ -222,28 +221,30 @@ class DeployPlan final : public Plan {
 
 }  // namespace
 
-void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                      const std::function<void()>& checkpoint) {
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                                       DeployTypes types) {
+  return std::make_unique<DeployPlan>(cfg, agents, std::move(types));
+}
+
+void run_deploy_stage(Driver& driver) {
+  const io::RunConfig& cfg = driver.config();
+  io::h5::File& file = driver.file();
+  const std::vector<collective::Agent> agents = load_population(file);
   const int R = cfg.connectors.replicates;
-  // the collective types: every trained kind on uniform and on diverse pairs
-  std::vector<std::string> types;
-  std::vector<std::vector<std::vector<double>>> weights;  // [type][replicate] → params
-  std::vector<collective::Tether> tethers;
-  std::vector<bool> diverse;
+  DeployTypes types;
   for (const std::string& kind : cfg.connectors.kinds) {
     DIVCOLL_THROW_UNLESS(file.has("connectors/" + kind + "/params"),
                          file.file() << " has no trained " << kind << " connectors: run the connectors stage first");
     const std::vector<std::vector<double>> reps = io::read_weights(file, "connectors/" + kind, R);
     for (const char* dep : {"uniform", "diverse"}) {
-      types.push_back(kind + "@" + dep);
-      weights.push_back(reps);
-      tethers.push_back(collective::tether(cfg, kind));
-      diverse.push_back(std::string(dep) == "diverse");
+      types.names.push_back(kind + "@" + dep);
+      types.weights.push_back(reps);
+      types.tethers.push_back(collective::tether(cfg, kind));
+      types.diverse.push_back(std::string(dep) == "diverse");
     }
   }
-  DeployPlan plan(cfg, agents, types, weights, tethers, diverse);
-  drive(comm, cfg, file, plan, checkpoint);
+  DeployPlan plan(cfg, agents, std::move(types));
+  driver.drive(plan);
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::stages

@@ -16,16 +16,32 @@
 // status: 0 ok, 1 nan, 2 unstable; travel is NaN unless ok, and no summary averages over NaN.
 #pragma once
 
-#include <mpi.h>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
 
-#include <functional>
-
+#include "collective/builders.hpp"
 #include "config/config.hpp"
-#include "io/h5.hpp"
 #include "config/pipeline.hpp"
+#include "stages/plan.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 
 inline constexpr uint64_t kDeployStage = io::stage_stream("deploy");
 
-}  // namespace divcoll::mpi
+// the collective types deployed: every trained kind on uniform and on diverse pairs
+struct DeployTypes {
+  std::vector<std::string> names;                          // <kind>@uniform, <kind>@diverse
+  std::vector<std::vector<std::vector<double>>> weights;   // [type][replicate] → params
+  std::vector<collective::Tether> tethers;                 // [type]
+  std::vector<bool> diverse;                               // [type]: on diverse pairs
+};
+
+// the deployment as a plan: one round per environment, one item per episode (every agent alone, then every
+// collective type × replicate × pair); the rows of round e are row e of every dataset. It keeps references to
+// `cfg` and `agents`, which must outlive it
+std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                                       DeployTypes types);
+
+}  // namespace divcoll::stages

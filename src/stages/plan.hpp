@@ -1,10 +1,11 @@
 // a stage as a plan: what it computes, round by round, and nothing about how (ranks, files, printing).
 //
-// A plan has rounds (a stage's generations or iterations), each a list of items (serialized tasks). The
-// driver (mpi/driver.hpp) spreads a round's items over the ranks, hands the plan every result in item order
-// (so a round's reduction does not depend on the rank count), then asks it what the round records. Between
-// rounds it commits the plan's state and the round counter together, as one checkpoint step, and resumes
-// from the last commit. The plan's methods run on the master unless noted; compute() runs on every rank.
+// A plan has rounds (a stage's generations or iterations), each a list of items (serialized tasks). A farm
+// runs it: the driver (mpi/driver.hpp) spreads a round's items over the ranks, hands the plan every result in
+// item order (so a round's reduction does not depend on the rank count), then asks it what the round records.
+// Between rounds it commits the plan's state and the round counter together, as one checkpoint step, and
+// resumes from the last commit. The serial farm (stages/serial.hpp) runs the same methods in one process,
+// without files. The plan's methods run on the master unless noted; compute() runs on every rank.
 //
 // To add a stage: write its plan (this interface) and its rows in the run-file schema (src/io/run_file.cpp).
 #pragma once
@@ -16,7 +17,7 @@
 #include <variant>
 #include <vector>
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 
 // rows of one run-file dataset: `rows` of a dataset of dims `dims` (created on first use), row-major values
 struct Record {
@@ -104,4 +105,4 @@ class Plan {
   virtual std::string finish_summary() const { return {}; }
 };
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::stages

@@ -3,7 +3,7 @@
 // statistics of Fig. 3A and Table S1. It reads only the agents, connectors and deploy groups, so it can be
 // added to any finished run with `divcoll run CONFIG --from analysis --base RUN.h5 --out NEW.h5`.
 //
-// Two plans run by the driver (mpi/plan.hpp), both counting in /analysis; their statistics are each plan's
+// Two plans (stages/plan.hpp), both counting in /analysis; their statistics are each plan's
 // finish(), over its rows restored after a resume.
 // Adversity (§8.1), one round of two farm passes per environment (committed after each, dtw_envs_done):
 //   1. every agent alone, recorded: its behaviour = its 11 masses relative to its centre of mass every
@@ -41,16 +41,44 @@
 //                                                      Welch's p (NaN when a type is missing)
 #pragma once
 
-#include <mpi.h>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
-#include <functional>
-
+#include "collective/builders.hpp"
 #include "config/config.hpp"
-#include "io/h5.hpp"
 #include "config/pipeline.hpp"
+#include "stages/plan.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 
 inline constexpr uint64_t kAnalysisStage = io::stage_stream("analysis");
 
-}  // namespace divcoll::mpi
+// the two types the analyses compare: weak connectors deployed as trained
+inline const std::array<std::string, 2> kAnalysisTypes = {"weak_uniform@uniform", "weak_diverse@diverse"};
+
+// deploy's travel and status, agents alone (E × pop) and collectives (E × T × R × NP), to check the
+// re-simulated episodes against (master)
+struct Deployed {
+  std::vector<double> alone, pairs;
+  std::vector<uint8_t> alone_status, pairs_status;
+};
+
+// the adversity analysis (§8.1) as a plan. Per type of kAnalysisTypes: its weights (one per replicate), its pairs
+// and its index among deploy's `deploy_types` types; `novel`: the novel environments. It keeps references to
+// `cfg` and `agents`, which must outlive it
+std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                                          std::array<std::vector<std::vector<double>>, 2> weights,
+                                          std::array<std::vector<std::pair<int, int>>, 2> pairs,
+                                          std::array<int, 2> type_index, int deploy_types,
+                                          std::vector<std::string> novel, Deployed deployed);
+
+// the familiarity analysis (§8.2) as a plan. `hidden`: deploy's states of the two types (E × R × NP × K × dim:
+// hidden states, dim 32, or the network inputs, dim 11). It keeps a reference to `cfg`, which must outlive it
+std::unique_ptr<Plan> make_familiarity_plan(const io::RunConfig& cfg, std::vector<std::string> novel,
+                                            std::array<std::vector<float>, 2> hidden, int K, int dim);
+
+}  // namespace divcoll::stages

@@ -1,4 +1,4 @@
-#include "mpi/analysis_stage.hpp"
+#include "stages/analysis.hpp"
 
 #include <algorithm>
 #include <array>
@@ -16,20 +16,19 @@
 #include "common/check.hpp"
 #include "io/run_file.hpp"
 #include "io/run_read.hpp"
-#include "mpi/connectors_stage.hpp"
-#include "mpi/deploy_stage.hpp"
-#include "mpi/driver.hpp"
-#include "mpi/protocol.hpp"
+#include "stages/connectors.hpp"
+#include "stages/deploy.hpp"
+#include "stages/driver.hpp"
+#include "stages/payload.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::stages {
 namespace {
 
 using io::h5::Dims;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kHidden = 32;  // hidden units per connector spring state (SPEC §6.3)
 
-// the two types the analyses compare: weak connectors deployed as trained
-const std::array<std::string, 2> kTypes = {"weak_uniform@uniform", "weak_diverse@diverse"};
+const std::array<std::string, 2>& kTypes = kAnalysisTypes;
 
 // round 1: an agent alone, recorded
 struct AloneDone {
@@ -112,12 +111,6 @@ std::vector<double> finite(const std::vector<double>& v) {
 // taken over every environment's rows, restored after a resume
 class AdversityPlan final : public Plan {
  public:
-  // deploy's travel and status, agents alone (E × pop) and collectives (E × T × R × NP), to check the
-  // re-simulated episodes against (master)
-  struct Deployed {
-    std::vector<double> alone, pairs;
-    std::vector<uint8_t> alone_status, pairs_status;
-  };
   AdversityPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
                 std::array<std::vector<std::vector<double>>, 2> weights,
                 std::array<std::vector<std::pair<int, int>>, 2> pairs,
@@ -141,8 +134,8 @@ class AdversityPlan final : public Plan {
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
     return {{"types", kTypes[0] + "," + kTypes[1]},
-            {"environments", join(envs_)},
-            {"novel_environments", join(novel_)}};
+            {"environments", io::join(envs_)},
+            {"novel_environments", io::join(novel_)}};
   }
   std::vector<std::string> state_paths() const override {
     std::vector<std::string> p;
@@ -514,16 +507,31 @@ class FamiliarityPlan final : public Plan {
 
 }  // namespace
 
-void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
-                        const std::function<void()>& checkpoint) {
+std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                                          std::array<std::vector<std::vector<double>>, 2> weights,
+                                          std::array<std::vector<std::pair<int, int>>, 2> pairs,
+                                          std::array<int, 2> type_index, int deploy_types,
+                                          std::vector<std::string> novel, Deployed deployed) {
+  return std::make_unique<AdversityPlan>(cfg, agents, std::move(weights), std::move(pairs), type_index, deploy_types,
+                                         std::move(novel), std::move(deployed));
+}
+
+std::unique_ptr<Plan> make_familiarity_plan(const io::RunConfig& cfg, std::vector<std::string> novel,
+                                            std::array<std::vector<float>, 2> hidden, int K, int dim) {
+  return std::make_unique<FamiliarityPlan>(cfg, std::move(novel), std::move(hidden), K, dim);
+}
+
+void run_analysis_stage(Driver& driver) {
+  const io::RunConfig& cfg = driver.config();
+  io::h5::File& file = driver.file();
   const auto& D = cfg.deploy;
   const std::vector<std::string>& envs = D.environments;
   const int NP = D.pairs, R = cfg.connectors.replicates;
   DIVCOLL_THROW_UNLESS(complete(file, "deploy"), file.file() << ": the analysis stage needs a complete deploy stage");
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const std::vector<collective::Agent> agents = load_population(file);
 
   // the two types among deploy's, their weights and pairs
-  const std::vector<std::string> deploy_types = split(file.group("deploy").read_string("types"));
+  const std::vector<std::string> deploy_types = io::split(file.group("deploy").read_string("types"));
   std::array<int, 2> type_index{};
   std::array<std::vector<std::vector<double>>, 2> weights;
   for (int t = 0; t < 2; ++t) {
@@ -560,7 +568,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
                                 " agents, as the config and the population say";
   const std::string pairs_why = std::to_string(hE) + " environments × " + std::to_string(hT) + " types × " +
                                 std::to_string(R) + " replicates × " + std::to_string(NP) + " pairs, as the config says";
-  AdversityPlan::Deployed deployed;
+  Deployed deployed;
   deployed.alone = io::read_checked<double>(file, "deploy/agents/travel_u", "env,agent", alone_dims, alone_why);
   deployed.alone_status = io::read_checked<uint8_t>(file, "deploy/agents/status", "env,agent", alone_dims, alone_why);
   deployed.pairs =
@@ -569,7 +577,7 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
       io::read_checked<uint8_t>(file, "deploy/collectives/status", "env,type,replicate,pair", pairs_dims, pairs_why);
   AdversityPlan adversity(cfg, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
                           std::move(deployed));
-  drive(comm, cfg, file, adversity, checkpoint);
+  driver.drive(adversity);
 
   // familiarity: flat's hidden states against each novel environment's (every rank reads them while
   // rounds are left: the rank that computes a fit samples its states)
@@ -597,8 +605,8 @@ void run_analysis_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& f
         K = static_cast<int>(d[3]);
       }
     FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K, dim);
-    drive(comm, cfg, file, familiarity, checkpoint);
+    driver.drive(familiarity);
   }
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::stages

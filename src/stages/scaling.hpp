@@ -1,0 +1,30 @@
+// the scaling stage (SPEC §7.4): chains of N agents, uniform (N clones with a weak uniform-trained connector) and
+// diverse (N distinct agents with a weak diverse-trained one), in every environment
+//
+// group /scaling (attributes status, environments, variants = uniform,diverse, envs_done):
+//   sizes (S)                     chain sizes N
+//   n<N>/diverse_agents           (R·draws × N) the agents of each diverse chain, heap order
+//   travel_bl, travel_u, status   (E × S × 2 × R × draws); variant 0: N clones of agent `draw` with a weak
+//                                 uniform-trained connector; 1: the diverse chain with a weak diverse-trained one
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "collective/builders.hpp"
+#include "config/config.hpp"
+#include "config/pipeline.hpp"
+#include "stages/plan.hpp"
+
+namespace divcoll::stages {
+
+inline constexpr uint64_t kScalingStage = io::stage_stream("scaling");
+
+// the chains as a plan: one round per environment, one item per chain (size × variant × replicate × draw).
+// `weights`: the weak uniform-trained replicates, then the weak diverse-trained ones. It keeps references to
+// `cfg` and `agents`, which must outlive it
+std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+                                        std::vector<std::vector<double>> weights);
+
+}  // namespace divcoll::stages

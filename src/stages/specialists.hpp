@@ -1,0 +1,23 @@
+// the specialists stage (SPEC §7.3): weak connectors trained on diverse pairs in each novel environment, then
+// each deployed in its environment on the deployment stage's diverse pairs (an EpisodesPlan, stages/episodes.hpp)
+//
+// Run file, group /specialists (attributes status, environments = the novel ones, replicates, envs_done):
+//   <env>/params (R × P_c), <env>/curve_u, curve_bl, nan_pairs (I × R)   as in /connectors
+//   state/*                                                             the optimizer state
+//   travel_bl, travel_u, status  (novel envs × R × deploy.pairs)  each specialist in its environment on
+//                                                                 the deployment stage's diverse pairs,
+//                                                                 one round (row) per environment
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "config/config.hpp"
+#include "config/pipeline.hpp"
+#include "stages/plan.hpp"
+
+namespace divcoll::stages {
+
+inline constexpr uint64_t kSpecialistsStage = io::stage_stream("specialists");
+
+}  // namespace divcoll::stages

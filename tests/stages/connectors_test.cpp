@@ -1,0 +1,124 @@
+// connector training's plans (stages/connectors.hpp) through the serial farm: a few pairs, iterations and steps
+#include "stages/connectors.hpp"
+
+#include <gtest/gtest.h>
+
+#include "collective/deploy_variants.hpp"
+#include "collective/pairs.hpp"
+#include "evo/connector_opt.hpp"
+#include "morph/body.hpp"
+#include "stages/stage_testing.hpp"
+
+namespace divcoll::stages {
+namespace {
+
+struct Case {
+  io::RunConfig cfg;
+  std::vector<collective::Agent> agents = test::random_population(4);
+  std::vector<ConnectorSlot> slots;
+  TrainSpec spec;
+  explicit Case(std::vector<std::string> overrides) {
+    overrides.insert(overrides.end(), {"connectors.kinds=weak_uniform,weak_diverse", "connectors.replicates=2",
+                                       "connectors.iterations=3", "connectors.batch_pairs=3",
+                                       "connectors.episode_steps=60"});
+    cfg = test::tiny(overrides);
+    const auto& C = cfg.connectors;
+    const int R = C.replicates;
+    // as the connectors stage's runner makes them: connector c = kind·R + replicate
+    for (int k = 0; k < static_cast<int>(C.kinds.size()); ++k)
+      for (int r = 0; r < R; ++r)
+        slots.push_back({collective::tether(cfg, C.kinds[k]), C.kinds[k] == "weak_diverse", "flat",
+                         kConnectorsStage + k * R + r, "connectors/" + C.kinds[k], r});
+    spec = {"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
+  }
+  std::unique_ptr<ConnectorsPlan> plan() const { return make_connectors_plan(connectors_def(cfg), agents, slots, spec); }
+};
+
+TEST(ConnectorsPlan, RecordsEveryIterationsCurvesTheWeightsAndTheState) {
+  const Case c({});
+  const auto plan = c.plan();
+  const SerialRun run = run_serial(*plan);
+  const uint64_t I = 3, R = 2, N = 4, Pc = sim::connector_param_count();
+  EXPECT_EQ(run.done, 3);
+  EXPECT_EQ(run.items, static_cast<int64_t>(I * N * 3));  // every slot's batch, every iteration
+  const test::Datasets d = test::written(run);
+  for (const char* kind : {"weak_uniform", "weak_diverse"}) {
+    const std::string g = std::string("connectors/") + kind;
+    for (const char* curve : {"/curve_u", "/curve_bl", "/nan_pairs"})
+      EXPECT_EQ(test::at(d, g + curve).dims, (std::vector<uint64_t>{I, R})) << g << curve;
+    EXPECT_EQ(test::at(d, g + "/params").dims, (std::vector<uint64_t>{R, Pc}));
+    for (double v : test::at(d, g + "/curve_u").values) EXPECT_TRUE(std::isfinite(v)) << g;  // every row written, ok
+  }
+  for (const char* s : {"params", "adam_m", "adam_v"})
+    EXPECT_EQ(test::at(d, std::string("connectors/state/") + s).dims, (std::vector<uint64_t>{N, Pc}));
+  // the trained weights (what train_connectors broadcasts) are the recorded ones
+  const auto w = plan->weights();
+  ASSERT_EQ(w.size(), N);
+  for (size_t q = 0; q < Pc; ++q) ASSERT_EQ(test::at(d, "connectors/weak_diverse/params").values[Pc + q], w[3][q]);
+}
+
+TEST(ConnectorsPlan, TheFirstIterationsCurveIsTheMeanOfItsPairEpisodes) {
+  const Case c({});
+  const auto plan = c.plan();
+  const test::Datasets d = test::written(run_serial(*plan));
+  sim::Simulator sim;
+  sim::RunOptions ro;
+  ro.steps = c.spec.episode_steps;
+  ro.grad = true;
+  ro.agent_param_grad = false;
+  for (int s = 0; s < 4; ++s) {
+    const ConnectorSlot& slot = c.slots[s];
+    Rng init = make_rng(c.cfg.run.seed, slot.stream, 1000000);
+    const std::vector<double> w = morph::init_connector_params(init, c.cfg.connectors.init_out_gain);
+    Rng batch = make_rng(c.cfg.run.seed, slot.stream, 0);
+    const auto pairs = slot.diverse ? collective::random_pairs(batch, 4, c.spec.batch_pairs)
+                                    : collective::uniform_pairs(c.spec.batch_pairs);
+    collective::ProbeSum sum;
+    for (const auto& [a, b] : pairs)
+      sum.add(collective::run_pair(sim, c.agents[a], c.agents[b], w, slot.tether, "flat", ro, nullptr));
+    const double want = sum.mean().travel_u;
+    EXPECT_EQ(test::at(d, slot.group + "/curve_u").values[slot.column], want) << slot.group << " " << slot.column;
+  }
+}
+
+TEST(ConnectorsPlan, AWorkersPlanAndAnyComputeOrderGiveTheSameWeights) {
+  const Case c({});
+  const test::Datasets want = test::written(run_serial(*c.plan()));
+  const auto again = c.plan();
+  test::expect_same(test::written(run_serial(*again)), want);  // deterministic
+  const auto master = c.plan(), worker = c.plan();
+  SerialOptions o;
+  o.order = SerialOptions::Order::shuffled;
+  o.shuffle_seed = 5;
+  test::expect_same(test::written(run_serial(*master, o, worker.get())), want);
+}
+
+TEST(ConnectorsPlan, AResumeFromACommittedIterationContinuesAsAnUninterruptedRun) {
+  const Case c({});
+  const test::Datasets want = test::written(run_serial(*c.plan()));
+  for (int cut = 1; cut < 3; ++cut) test::expect_same(test::resumed([&] { return c.plan(); }, cut), want);
+}
+
+TEST(ConnectorsPlan, TheExtendedPlanKeepsTheBestWeightsAndResumesToTheSameRun) {
+  const Case c({"connectors.keep_best=true", "connectors.validation_pairs=2", "connectors.lr_schedule=cosine"});
+  ASSERT_TRUE(collective::extended(collective::opt_settings(c.cfg.connectors)));
+  const auto plan = c.plan();
+  EXPECT_TRUE(plan->closing_round());
+  const SerialRun run = run_serial(*plan);
+  const test::Datasets want = test::written(run);
+  EXPECT_EQ(test::at(want, "connectors/weak_uniform/val_bl").dims, (std::vector<uint64_t>{4, 2}));  // I + 1 rows
+  EXPECT_EQ(test::at(want, "connectors/weak_uniform/best_iteration").dims, std::vector<uint64_t>{2});
+  for (double v : test::at(want, "connectors/weak_uniform/val_bl").values) EXPECT_FALSE(std::isnan(v));
+  EXPECT_EQ(test::at(want, "connectors/state/best").dims, (std::vector<uint64_t>{4, 2}));
+  // the kept weights are those of the best validation row
+  for (int r = 0; r < 2; ++r) {
+    const int best = static_cast<int>(test::at(want, "connectors/weak_uniform/best_iteration").values[r]);
+    double top = -INFINITY;
+    for (int it = 0; it <= 3; ++it) top = std::max(top, test::at(want, "connectors/weak_uniform/val_bl").values[it * 2 + r]);
+    EXPECT_EQ(test::at(want, "connectors/weak_uniform/val_bl").values[best * 2 + r], top);
+  }
+  for (int cut = 1; cut < 3; ++cut) test::expect_same(test::resumed([&] { return c.plan(); }, cut), want);
+}
+
+}  // namespace
+}  // namespace divcoll::stages
