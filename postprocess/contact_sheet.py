@@ -32,7 +32,7 @@ TYPES = [("weak_uniform@uniform", "uniform pair, weak uniform-trained"),
          ("weak_diverse@diverse", "diverse pair, weak diverse-trained")]
 
 
-from divcoll_post.runfile import text as _s  # noqa: E402
+from divcoll_post.reader import RunFileError, list_attr, open_file, text as _s  # noqa: E402
 
 
 def run(cmd):
@@ -53,13 +53,15 @@ def main(argv=None):
     ap.add_argument("--gifs", action="store_true", help="also write an animation per episode")
     a = ap.parse_args(argv)
     try:
-        with h5py.File(a.run, "r") as f:
+        with open_file(a.run) as f:
             if "deploy/collectives/travel_u" not in f:
                 print(f"contact_sheet: {a.run} has no deploy stage (run it first)", file=sys.stderr)
                 return 2
-            envs = _s(f["deploy"].attrs["environments"]).split(",")
-            types = _s(f["deploy"].attrs["types"]).split(",")
+            envs, types = list_attr(f["deploy"], "environments"), list_attr(f["deploy"], "types")
             steps = int(tomllib.loads(_s(f.attrs["config"]))["deploy"]["episode_steps"])
+    except RunFileError as e:
+        print(f"contact_sheet: {e}", file=sys.stderr)
+        return 2
     except OSError as e:
         print(f"contact_sheet: cannot read {a.run}: {e}", file=sys.stderr)
         return 2

@@ -21,7 +21,6 @@ import os
 import re
 import sys
 
-import h5py
 import numpy as np
 
 import matplotlib
@@ -29,10 +28,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from divcoll_post.runfile import STAGES  # noqa: E402
-
-
-from divcoll_post.runfile import text as _s  # noqa: E402
+from divcoll_post.reader import STAGES, open_file, text as _s  # noqa: E402
 
 
 def parse_serial(text):
@@ -68,7 +64,7 @@ def read_concurrent(out):
 
 def _stage_rows(path, n):
     rows = []
-    with h5py.File(path, "r") as f:
+    with open_file(path) as f:
         for st in STAGES:
             if st not in f or "wall_s_last_session" not in f[st].attrs:
                 continue

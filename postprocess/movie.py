@@ -63,7 +63,7 @@ class InputError(Exception):
     pass
 
 
-from divcoll_post.runfile import text as _s  # noqa: E402
+from divcoll_post.reader import RunFileError, complete, list_attr, open_file, text as _s  # noqa: E402
 
 
 def run(cmd):
@@ -288,12 +288,10 @@ class RunFile:
     def __init__(self, path, divcoll, work):
         self.path, self.divcoll, self.work = path, divcoll, work
         try:
-            with h5py.File(path, "r") as f:
-                if _s(f.attrs.get("format", "")) != "divcoll-run":
-                    raise InputError(f"{path} is not a divcoll run file")
+            with open_file(path) as f:
                 self.cfg = tomllib.loads(_s(f.attrs["config"]))
                 for st in ("agents", "connectors", "deploy"):
-                    if st not in f or _s(f[st].attrs.get("status", "")) != "complete":
+                    if not complete(f, st):
                         raise InputError(f"{path} has no complete {st} stage (the movie needs agents, connectors "
                                          "and deploy)")
                 gens = sorted(k for k in f["agents"] if k.startswith("gen_"))
@@ -302,10 +300,11 @@ class RunFile:
                 self.final_fitness = f["agents/final/fitness"][()]
                 self.curve = np.nanmean(f["connectors/weak_diverse/curve_bl"][()], axis=1)
                 d = f["deploy"]
-                self.envs = _s(d.attrs["environments"]).split(",")
-                self.types = _s(d.attrs["types"]).split(",")
+                self.envs, self.types = list_attr(d, "environments"), list_attr(d, "types")
                 self.coll_bl = d["collectives/travel_bl"][()]
                 self.alone_bl = d["agents/travel_bl"][()]
+        except RunFileError as e:
+            raise InputError(str(e))
         except OSError as e:
             raise InputError(f"cannot read {path}: {e}")
 

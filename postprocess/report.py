@@ -28,6 +28,7 @@ import report_html  # noqa: E402
 import summary  # noqa: E402
 from divcoll_post import analysis as A  # noqa: E402
 from divcoll_post import single_run, verdicts as V  # noqa: E402
+from divcoll_post.reader import NotARunFile, RunFileError, open_file  # noqa: E402
 
 # figure scripts, in the paper's order, with the arguments they take besides the run file and --out
 FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig3.py", []), ("fig4.py", []), ("fig_s2.py", []),
@@ -40,7 +41,7 @@ def analysis_skip(run):
     """None when the analysis stage is complete, else why Fig. 3 and Table S1 are skipped"""
     try:
         st, desc = A.analysis_status(run)
-    except OSError as e:
+    except (OSError, RunFileError) as e:
         return f"cannot read the run file: {e}"
     if st == "complete":
         return None
@@ -235,20 +236,18 @@ def main(argv=None):
         print(f"report: no such run file: {a.run}", file=sys.stderr)
         return 2
     try:
-        import h5py
-        with h5py.File(a.run, "r") as f:
-            fmt = f.attrs.get("format", b"")
-            fmt = fmt.decode() if isinstance(fmt, bytes) else str(fmt)
-        if fmt != "divcoll-run":
-            print(f"report: {a.run} is not a divcoll run file (its format attribute is {fmt or 'missing'!r}; "
-                  "a scene or trajectory file, or a foreign HDF5 file?)", file=sys.stderr)
-            return 2
-    except OSError as e:
+        with open_file(a.run):
+            pass
+    except NotARunFile as e:
+        print(f"report: {a.run} is not a divcoll run file (its format attribute is {e.fmt or 'missing'!r}; "
+              "a scene or trajectory file, or a foreign HDF5 file?)", file=sys.stderr)
+        return 2
+    except RunFileError as e:
         print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
         return 2
     try:
         path, n, v = write_report(a.run, a.out, a.divcoll, a.movie, a.quick)
-    except (OSError, KeyError) as e:
+    except (OSError, KeyError, RunFileError) as e:
         print(f"report: cannot read {a.run}: {e}", file=sys.stderr)
         return 2
     print(f"report: wrote {path} and {os.path.join(a.out, 'report.html')} ({n} figures; claims: "

@@ -13,11 +13,10 @@ import re
 import shlex
 import tomllib
 
-import h5py
 import numpy as np
 
-
-from divcoll_post.runfile import text as _s  # noqa: E402
+from divcoll_post.reader import complete, list_attr, open_file, text as _s  # noqa: E402
+from divcoll_post.results import ok_mean  # noqa: E402
 
 
 def _median_ok(travel, status):
@@ -29,11 +28,6 @@ def _median_ok(travel, status):
     return int(idx[np.argsort(travel[ok], kind="stable")[(len(idx) - 1) // 2]])
 
 
-def _ok_mean(travel, status):
-    ok = (status == 0) & np.isfinite(travel)
-    return float(travel[ok].mean()) if ok.any() else float("nan")
-
-
 class Episodes:
     """the export commands of a run file's episodes, registered as the report asks for them (anchor → line)"""
 
@@ -41,7 +35,7 @@ class Episodes:
         self.run_arg = shlex.quote(run_arg)
         self.items = {}  # anchor -> Markdown text of the list item, in the order asked for
         self.envs, self.types, self.spec_envs, self.scale_envs, self.sizes = [], [], [], [], []
-        with h5py.File(run, "r") as f:
+        with open_file(run) as f:
             cfg = tomllib.loads(_s(f.attrs.get("config", "")))
             self.steps = {"deploy": cfg.get("deploy", {}).get("episode_steps"),
                           "scaling": cfg.get("scaling", {}).get("episode_steps")}
@@ -51,16 +45,15 @@ class Episodes:
 
             if "deploy/collectives/travel_bl" in f and "deploy/agents/travel_bl" in f:
                 d = f["deploy"]
-                self.envs = _s(d.attrs["environments"]).split(",")
-                self.types = _s(d.attrs["types"]).split(",")
+                self.envs, self.types = list_attr(d, "environments"), list_attr(d, "types")
                 self.alone_t, self.alone_s = arrays(d["agents"])
                 self.coll_t, self.coll_s = arrays(d["collectives"])
                 self.envs = self.envs[: min(len(self.envs), self.coll_t.shape[0])]
-            if "specialists/travel_bl" in f and _s(f["specialists"].attrs.get("status", "")) == "complete":
-                self.spec_envs = _s(f["specialists"].attrs["environments"]).split(",")
+            if "specialists/travel_bl" in f and complete(f, "specialists"):
+                self.spec_envs = list_attr(f["specialists"], "environments")
                 self.spec_t, self.spec_s = arrays(f["specialists"])
-            if "scaling/travel_bl" in f and _s(f["scaling"].attrs.get("status", "")) == "complete":
-                self.scale_envs = _s(f["scaling"].attrs["environments"]).split(",")
+            if "scaling/travel_bl" in f and complete(f, "scaling"):
+                self.scale_envs = list_attr(f["scaling"], "environments")
                 self.sizes = [int(n) for n in f["scaling/sizes"][()]]
                 self.chain_t, self.chain_s = arrays(f["scaling"])
 
@@ -138,9 +131,9 @@ class Episodes:
         for e, env in enumerate(self.envs):
             cells = []
             a = self.alone(env)
-            cells.append(f"[{_ok_mean(self.alone_t[e], self.alone_s[e]):.3f}](#{a})" if a else "—")
+            cells.append(f"[{ok_mean(self.alone_t[e], self.alone_s[e])[0]:.3f}](#{a})" if a else "—")
             for t, typ in enumerate(self.types):
-                m = _ok_mean(self.coll_t[e, t], self.coll_s[e, t])
+                m = ok_mean(self.coll_t[e, t], self.coll_s[e, t])[0]
                 c = self.pair(env, typ)
                 cells.append(f"[{m:.3f}](#{c})" if c else ("—" if not np.isfinite(m) else f"{m:.3f}"))
             out.append(f"| {env} | " + " | ".join(cells) + " |")

@@ -34,6 +34,7 @@ sys.path.insert(0, HERE)
 
 from divcoll_post import single_run as S  # noqa: E402
 from divcoll_post import verdicts as V  # noqa: E402
+from divcoll_post.reader import open_file, text  # noqa: E402
 from divcoll_post.results import load_deploy, ok_mean  # noqa: E402
 
 MIN_SEEDS = 3
@@ -105,7 +106,6 @@ def _readings(pop, protocol):
 
 def summarize(path):
     """the summary dict of a run file (and its arrays, written beside it)"""
-    import h5py
     V.write_arrays(path)
     arrays = V.read_arrays(V.arrays_path(path))
     cfg = S.config(path)
@@ -124,8 +124,8 @@ def summarize(path):
         fig = {"environments": dep.envs, "types": dep.types,
                "alone": {k: [float(x) for x in pop.alone(p)] for k, p in readings.items()},
                "collectives": {t: [ok_mean(*dep.collective(t, e))[0] for e in dep.envs] for t in dep.types}}
-    with h5py.File(path, "r") as f:
-        attrs = {a: V._s(f.attrs[a]) for a in ("git_commit", "base_git_commit", "start_time", "end_time")
+    with open_file(path) as f:
+        attrs = {a: text(f.attrs[a]) for a in ("git_commit", "base_git_commit", "start_time", "end_time")
                  if a in f.attrs}
     attrs["config"] = cfg  # the run's config as its values (the run file's TOML text, comments and all, is ~12 KB)
     return {"format": SUMMARY_FORMAT, "version": SUMMARY_VERSION, "run_file": os.path.basename(path),

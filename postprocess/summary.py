@@ -10,28 +10,10 @@ and reported, never averaged. "Novel" is the mean over the novel environments of
 import argparse
 import sys
 
-import h5py
 import numpy as np
 
-
-from divcoll_post.runfile import STAGES, text as _s  # noqa: E402
-
-
-def ok_mean(travel, status):
-    """mean over ok episodes, and the count of not-ok ones"""
-    travel, status = np.asarray(travel, float), np.asarray(status)
-    ok = (status == 0) & np.isfinite(travel)
-    return (float(travel[ok].mean()) if ok.any() else float("nan")), int((~ok).sum())
-
-
-def env_means(travel, status):
-    """per-environment ok means of arrays shaped (E, ...)"""
-    out, bad = [], 0
-    for e in range(travel.shape[0]):
-        m, b = ok_mean(travel[e], status[e])
-        out.append(m)
-        bad += b
-    return np.array(out), bad
+from divcoll_post.reader import STAGES, RunFileError, complete, list_attr, open_file, text as _s  # noqa: E402
+from divcoll_post.results import env_means, ok_mean  # noqa: E402
 
 
 def fmt(x):
@@ -53,7 +35,7 @@ def busy_text(attrs):
 def summarize(path):
     lines = []
     w = lines.append
-    with h5py.File(path, "r") as f:
+    with open_file(path) as f:
         w(f"# divcoll run summary: `{path}`\n")
         w(f"commit {_s(f.attrs.get('git_commit', '?'))}, seed {_s(f.attrs.get('seed', '?'))}, "
           f"ranks {_s(f.attrs.get('ranks', '?'))}, started {_s(f.attrs.get('start_time', '?'))}, "
@@ -75,7 +57,7 @@ def summarize(path):
         if "connectors" in f:
             w("**Connector training** (mean pair travel of the batch, BL, mean over replicates):\n")
             w("| kind | iteration 1 | last iteration | best iteration |\n|---|---|---|---|")
-            for kind in _s(f["connectors"].attrs["kinds"]).split(","):
+            for kind in list_attr(f["connectors"], "kinds"):
                 if f"connectors/{kind}/curve_bl" not in f:
                     continue
                 c = f[f"connectors/{kind}/curve_bl"][()]
@@ -87,8 +69,7 @@ def summarize(path):
             w("")
         if "deploy/collectives/travel_bl" in f:
             d = f["deploy"]
-            envs = _s(d.attrs["environments"]).split(",")
-            types = _s(d.attrs["types"]).split(",")
+            envs, types = list_attr(d, "environments"), list_attr(d, "types")
             done = int(d.attrs.get("envs_done", len(envs)))
             novel = [i for i, e in enumerate(envs[:done]) if e != "flat"]
             fl = envs.index("flat")
@@ -121,8 +102,8 @@ def summarize(path):
                 cells = [fmt(ok_mean(ct[e, t], cst[e, t])[0]) for t in range(len(types))]
                 w(f"| {envs[e]} | {fmt(am[e])} | " + " | ".join(cells) + " |")
             w("")
-        if "specialists/travel_bl" in f and _s(f["specialists"].attrs.get("status", "")) == "complete":
-            envs = _s(f["specialists"].attrs["environments"]).split(",")
+        if "specialists/travel_bl" in f and complete(f, "specialists"):
+            envs = list_attr(f["specialists"], "environments")
             t, s = f["specialists/travel_bl"][()], f["specialists/status"][()]
             w("**Specialists** (Fig. S2; best replicate in its own environment, BL):\n")
             w("| environment | best specialist | mean of specialists |\n|---|---|---|")
@@ -130,8 +111,8 @@ def summarize(path):
                 reps = [ok_mean(t[e, r], s[e, r])[0] for r in range(t.shape[1])]
                 w(f"| {env} | {fmt(np.nanmax(reps))} | {fmt(np.nanmean(reps))} |")
             w("")
-        if "scaling/travel_bl" in f and _s(f["scaling"].attrs.get("status", "")) == "complete":
-            envs = _s(f["scaling"].attrs["environments"]).split(",")
+        if "scaling/travel_bl" in f and complete(f, "scaling"):
+            envs = list_attr(f["scaling"], "environments")
             sizes = f["scaling/sizes"][()]
             t, s = f["scaling/travel_bl"][()], f["scaling/status"][()]
             novel = [i for i, e in enumerate(envs) if e != "flat"]
@@ -144,20 +125,20 @@ def summarize(path):
                     vals.append(np.mean(m[novel]))
                 w(f"| {n} | {fmt(vals[0])} | {fmt(vals[1])} |")
             w("")
-        if "graded" in f and _s(f["graded"].attrs.get("status", "")) == "complete":
-            envs = _s(f["graded"].attrs["environments"]).split(",")
+        if complete(f, "graded"):
+            envs = list_attr(f["graded"], "environments")
             novel = [i for i, e in enumerate(envs) if e != "flat"]
             w("**Graded diversity** (Fig. S3; novel environments, mean of env means, BL):\n")
             w("| population | diversity sources | agents alone | weak diverse pairs |\n|---|---|---|---|")
             if "deploy/collectives/travel_bl" in f:
                 d = f["deploy"]
-                types = _s(d.attrs["types"]).split(",")
+                types = list_attr(d, "types")
                 am, _ = env_means(d["agents/travel_bl"][()], d["agents/status"][()])
                 if "weak_diverse@diverse" in types:
                     t = types.index("weak_diverse@diverse")
                     pm, _ = env_means(d["collectives/travel_bl"][()][:, t], d["collectives/status"][()][:, t])
                     w(f"| main | behaviour,springs,shape,pairing | {fmt(np.mean(am[novel]))} | {fmt(np.mean(pm[novel]))} |")
-            for pop in ["same_shape", "same_shape_springs"]:
+            for pop in list_attr(f["graded"], "populations"):
                 g = f[f"graded/{pop}"]
                 am, _ = env_means(g["deploy/agents/travel_bl"][()], g["deploy/agents/status"][()])
                 pm, _ = env_means(g["deploy/pairs/travel_bl"][()], g["deploy/pairs/status"][()])
@@ -171,7 +152,6 @@ def summarize(path):
 def analysis_lines(path):
     """Fig. 3A's numbers and Table S1's gist when the analysis stage is complete; a note when it is not."""
     from divcoll_post import analysis as A
-    from divcoll_post.runfile import RunFileError
 
     st, desc = A.analysis_status(path)
     if st is None:
@@ -205,6 +185,9 @@ def main(argv=None):
     a = ap.parse_args(argv)
     try:
         text = summarize(a.run)
+    except RunFileError as e:
+        print(f"summary: {e}", file=sys.stderr)
+        return 2
     except (OSError, KeyError) as e:
         print(f"summary: cannot read {a.run}: {e}", file=sys.stderr)
         return 2

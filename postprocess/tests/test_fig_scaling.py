@@ -23,6 +23,7 @@ def write_run(path, stages, cpu=None):
     """stages: {name: (wall s, busy per rank, serial text or None)}; cpu: {name: (compute CPU s per rank, serving
     CPU s per rank)}"""
     with h5py.File(path, "w") as f:
+        f.attrs["format"] = "divcoll-run"
         for name, (wall, busy, serial) in stages.items():
             g = f.create_group(name)
             g.attrs["wall_s_last_session"] = wall

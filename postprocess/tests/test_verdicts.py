@@ -11,6 +11,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 from divcoll_post import verdict_page, verdicts as V  # noqa: E402
+from divcoll_post.reader import list_attr  # noqa: E402
 
 ENVS = ["flat", "decline", "gap", "ice", "incline", "low_gravity", "obstacle", "sand", "step_down", "step_up",
         "sticky", "treadmill", "wind"]
@@ -211,7 +212,7 @@ class Extract(unittest.TestCase):
         import h5py
         with h5py.File(self.path, "r") as f:
             rm = f["analysis/adversity/replicate_means"][()]
-            types = V._list_attr(f["analysis"], "types")
+            types = list_attr(f["analysis"], "types")
         for ti, t in enumerate(types):
             np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["worse"], rm[ti, 0], rtol=1e-12)
             np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["better"], rm[ti, 1], rtol=1e-12)
