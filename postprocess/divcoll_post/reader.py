@@ -158,8 +158,8 @@ def _checked_file(path) -> "h5py.File":
     if fmt != FORMAT:
         f.close()
         raise NotARunFile(
-            f"{path}: format is \"{fmt}\", not \"{FORMAT}\" (a divcoll run file is expected"
-            + (": scene and trajectory files are read by `divcoll simulate`)" if "divcoll" in str(fmt) else ")"),
+            f"{path}: format is \"{fmt}\", not \"{FORMAT}\": not a divcoll run file"
+            + (" (scene and trajectory files are read by `divcoll simulate`)" if "divcoll" in str(fmt) else ""),
             str(fmt),
         )
     return f

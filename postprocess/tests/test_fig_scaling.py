@@ -16,7 +16,7 @@ import h5py
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import fig_scaling as F  # noqa: E402
+from divcoll_post.figures import fig_scaling as F  # noqa: E402
 
 
 def write_run(path, stages, cpu=None):

@@ -13,7 +13,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 from divcoll_post import single_run as claims  # noqa: E402
-import summary  # noqa: E402
+from divcoll_post import summary  # noqa: E402
 from divcoll_post import results  # noqa: E402
 
 
