@@ -1,10 +1,11 @@
-"""report.html: the report page (report.py's Markdown) as one self-contained HTML file.
+"""report.html: the report page (report.py's Markdown) as one self-contained HTML file; the verdict page of a study
+(verdict_page.py) goes through the same writer (`write(..., name="verdicts.html", title=...)`).
 
 Figures are embedded (PNG as data: URIs), movies are <video controls> pointing at the MP4 files beside the
 page (relative paths: the folder can be moved or served as it is); the links from numbers to the `divcoll
 export` commands of their episodes (report_episodes.py) are anchors within the page, the episode list's items
 carrying the ids, and a table cell with many of them is folded into <details>. No script, no external
-resource: the page renders offline. Used by report.py (`write(run, out_dir, markdown)`).
+resource: the page renders offline. Used by report.py (`write(run, out_dir, markdown)`) and verdict_page.py.
 """
 import base64
 import html
@@ -25,6 +26,11 @@ nav { background: #fafafa; border: 1px solid #e3e3e3; padding: 0.4em 1em; }
 td.num a { text-decoration: none; }
 .wide { overflow-x: auto; }
 li:target, code:target { background: #fff3b0; }
+"""
+# the verdict page's verdicts (verdict_page.py)
+VERDICT_CSS = """
+.v-supported, .v-equivalent { color: #1a7f37; } .v-contradicted { color: #c62828; }
+.v-contradicted-negligible { color: #d4733a; } .v-inconclusive, .v-too-few-populations { color: #666; }
 """
 
 
@@ -61,9 +67,15 @@ def link(text, href, out_dir):
     return f'<a href="{html.escape(href)}">{text}</a>'
 
 
+VERDICTS = ("held", "did not hold", "too small to judge", "not measured",  # one run (the report)
+            "supported", "equivalent", "contradicted (negligible)", "contradicted", "inconclusive",
+            "too few populations")  # the verdict page
+
+
 def verdict_class(cell):
-    m = re.fullmatch(r"<strong>(held|did not hold|too small to judge|not measured)</strong>", cell.strip())
-    return f' class="v-{m.group(1).replace(" ", "-")}"' if m else ""
+    """the class of a table cell that is, or ends in, a verdict in bold"""
+    m = re.search(r"<strong>(" + "|".join(map(re.escape, VERDICTS)) + r")</strong>( \(power [^<]*\))?$", cell.strip())
+    return f' class="v-{re.sub(r"[^a-z]+", "-", m.group(1)).strip("-")}"' if m else ""
 
 
 def list_item(text, out_dir):
@@ -131,16 +143,18 @@ def markdown_to_html(md, out_dir):
     return out, toc
 
 
-def write(run, out_dir, md):
+def write(run, out_dir, md, name="report.html", title=None, css=CSS):
+    """out_dir/name: the page of Markdown `md` (figures it names relative to out_dir); title default 'divcoll report:
+    RUN'"""
     body, toc = markdown_to_html(md, out_dir)
     nav = "<nav><strong>Contents</strong>: " + " · ".join(
         f'<a href="#{a}">{inline(t, out_dir)}</a>' for a, t in toc) + "</nav>"
-    title = html.escape(f"divcoll report: {os.path.basename(run)}")
+    title = html.escape(title or f"divcoll report: {os.path.basename(run)}")
     k = 1 if body and body[0].startswith("<h1") else 0
     page = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
-            f"<title>{title}</title><style>{CSS}</style></head><body>", *body[:k], nav, *body[k:], "</body></html>"]
-    path = os.path.join(out_dir, "report.html")
+            f"<title>{title}</title><style>{css}</style></head><body>", *body[:k], nav, *body[k:], "</body></html>"]
+    path = os.path.join(out_dir, name)
     with open(path, "w") as fh:
         fh.write("\n".join(page) + "\n")
     return path

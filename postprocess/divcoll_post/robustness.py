@@ -30,6 +30,7 @@ import numpy as np
 
 
 from . import single_run as S  # noqa: E402
+from . import verdict_page  # noqa: E402
 from . import verdicts as V  # noqa: E402
 from .reader import open_file, text  # noqa: E402
 from .results import load_deploy, ok_mean  # noqa: E402
@@ -406,9 +407,27 @@ def fig2a(variant, values, seeds, path):
 
 # ---- the page ---------------------------------------------------------------------------------------------------
 
-def write_page(folder, out):
+def verdicts_section(folder, out, B):
+    """the study's verdict page (verdict_page.py: the protocol's judgement over populations, from the arrays
+    evaluate() just wrote or found) in out/verdicts, as verdicts.md and verdicts.html; the robustness page's lines
+    that link to it, or say why there is none"""
+    dest = os.path.join(out, "verdicts")
+    try:
+        path = verdict_page.write(folder, dest, B=B, html=True)
+    except (ValueError, KeyError) as e:  # no run of the main variant with kept arrays, arrays it cannot read
+        return None, [f"No verdict page: {e}.", ""]
+    rel = os.path.relpath(path, out)
+    return path, [f"The verdict page of this study (the pre-registered protocol's judgement over populations, "
+                  f"configs/studies/verdicts_protocol.md): [{rel}]({rel}) and "
+                  f"[{rel[:-3]}.html]({rel[:-3]}.html).", ""]
+
+
+def write_page(folder, out, verdicts_B=None):
+    """OUT/robustness.md with its figures; unless verdicts_B is None, also the study's verdict page in OUT/verdicts
+    (verdicts_section, verdicts_B bootstrap resamples); returns (robustness.md, the cells, verdicts.md or None)"""
     man = load_manifest(folder)
     res = evaluate(folder, man)
+    verdicts_path, verdicts_lines = (None, []) if verdicts_B is None else verdicts_section(folder, out, verdicts_B)
     # every complete run once (the report-time readings are columns of the same runs)
     runs = [run for col in res.values() if col["protocol"] is None for run in col["runs"]]
     from_summaries = sum(not run.from_file for run in runs)
@@ -419,6 +438,7 @@ def write_page(folder, out):
     lines = [f"# Robustness of the paper's claims: study {man['name']}", ""]
     if man.get("doc"):
         lines += [man["doc"], ""]
+    lines += verdicts_lines
     lines += [f"Study folder `{os.path.abspath(folder)}`; base config `{man['base']}`; seeds "
               f"{', '.join(map(str, man['seeds']))}; {done} of {len(man['run'])} runs complete. Every run: "
               + (", ".join(f"`{s}`" for s in man["scale"]) or "the base config as it is") + ". "
@@ -484,7 +504,7 @@ def write_page(folder, out):
     path = os.path.join(out, "robustness.md")
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
-    return path, res
+    return path, res, verdicts_path
 
 
 def main(argv=None):
@@ -492,18 +512,25 @@ def main(argv=None):
     ap.add_argument("study", help="study folder (divcoll study --out DIR)")
     ap.add_argument("--out", help="output folder (default DIR/robustness)")
     ap.add_argument("--divcoll", help="accepted for `divcoll report`; unused")
+    ap.add_argument("--resamples", type=int, default=V.B_DEFAULT,
+                    help=f"bootstrap resamples of the verdict page (protocol: {V.B_DEFAULT})")
+    ap.add_argument("--no-verdicts", action="store_true", help="only the robustness page, not the verdict page")
     ap.add_argument("--keep", metavar="DEST", help="also copy the study as its manifest, base config and run summaries "
                                                    "(no run files) into DEST, e.g. postprocess/gallery/studies/NAME")
     a = ap.parse_args(argv)
     out = a.out or os.path.join(a.study, "robustness")
     try:
-        path, res = write_page(a.study, out)
+        path, res, verdicts_path = write_page(a.study, out, None if a.no_verdicts else a.resamples)
         kept = keep(a.study, a.keep) if a.keep else None
-    except (OSError, ValueError, tomllib.TOMLDecodeError) as e:
+    except (OSError, ValueError, KeyError, tomllib.TOMLDecodeError) as e:
         print(f"robustness: {e}", file=sys.stderr)
         return 2
     n = sum(len(r["cells"]) for r in res.values())
     print(f"robustness: wrote {path} ({len(V.CLAIMS)} claims × {len(res)} variants = {n} cells)")
+    if verdicts_path:
+        print(f"robustness: wrote the verdict page {verdicts_path} and {verdicts_path[:-3]}.html")
+    elif not a.no_verdicts:
+        print("robustness: no verdict page (no run of the study's baseline variant with kept arrays)")
     if kept is not None:
         print(f"robustness: kept the study in {a.keep} ({kept} run summaries; `divcoll report {a.keep}` redraws the page)")
     return 0
