@@ -241,13 +241,13 @@ class StageCost:
         return self.c_fit if kind == "fit" else self.c_sim
 
 
-from divcoll_post.runfile import text as _s  # noqa: E402
+from divcoll_post.reader import RunFileError, open_file, text as _s  # noqa: E402
 
 
 def read_run(path, defaults):
     m = re.search(r"run_np(\d+)\.h5$", path)
     try:
-        with h5py.File(path, "r") as f:
+        with open_file(path) as f:
             if "config" not in f.attrs:
                 raise InputError(f"{path}: no config attribute (not a divcoll run file?)")
             cfg = merge(defaults, parse_toml(_s(f.attrs["config"]), f"{path} (stored config)"))
@@ -269,6 +269,8 @@ def read_run(path, defaults):
             return run
     except InputError:
         raise
+    except RunFileError as e:
+        raise InputError(str(e)) from None
     except (OSError, ValueError, KeyError) as e:
         raise InputError(f"{path}: cannot read ({e})") from None
 
@@ -413,7 +415,7 @@ def compare_measured(path, defaults, costs, g):
     if not os.path.isfile(path):
         raise InputError(f"{path}: no such file")
     try:
-        with h5py.File(path, "r") as f:
+        with open_file(path) as f:
             if "config" not in f.attrs:
                 raise InputError(f"{path}: no config attribute (not a divcoll run file?)")
             if "ranks" not in f.attrs:
@@ -429,6 +431,8 @@ def compare_measured(path, defaults, costs, g):
                         measured[st] = float(w)
     except InputError:
         raise
+    except RunFileError as e:
+        raise InputError(str(e)) from None
     except (OSError, ValueError, KeyError) as e:
         raise InputError(f"{path}: cannot read ({e})") from None
     rows = []

@@ -31,8 +31,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .results import StageMissing, _dataset, _require_stage, _s
-from .runfile import RunFileError, _decode, _open
+from .reader import (RunFileError, StageMissing, dataset, int_attr, list_attr, open_file, require_stage,
+                     stage_status, text)
 
 UNIFORM = "weak_uniform@uniform"  # uniform-trained weak connector on clones
 DIVERSE = "weak_diverse@diverse"  # diverse-trained weak connector on diverse pairs
@@ -43,24 +43,6 @@ COUNT_NAMES = ("both", "train-only", "novel-only")
 COUNT_LABEL = {"both": "in both training and novel cells", "train-only": "only in training cells",
                "novel-only": "only in novel cells"}
 WIND = "wind"
-
-
-def _list(g, name: str, where: str) -> List[str]:
-    if name not in g.attrs:
-        raise RunFileError(f"{where}: attribute '{name}' missing")
-    v = g.attrs[name]
-    if isinstance(v, np.ndarray) and v.ndim == 1:
-        return [_s(x) for x in v if _s(x)]
-    return [x.strip() for x in _s(v).split(",") if x.strip()]
-
-
-def _int_attr(g, name: str, default: int) -> int:
-    if name not in g.attrs:
-        return default
-    try:
-        return int(_decode(g.attrs[name]))
-    except (TypeError, ValueError):
-        return default
 
 
 def stars(p) -> str:
@@ -230,7 +212,7 @@ class Analysis:
         if not 0 <= replicate < fam.replicates:
             raise RunFileError(f"{self.path}: replicate {replicate} out of range 0..{fam.replicates - 1}")
         nt, nn = (int(x) for x in fam.n_states[type_][e, replicate])
-        with _open(self.path) as f:
+        with open_file(self.path) as f:
             name = f"analysis/familiarity/{type_}/embedding"
             if name not in f:
                 raise StageMissing(f"{self.path}: /{name} missing ({self.progress()})")
@@ -251,16 +233,16 @@ def load_analysis(path, need: Tuple[str, ...] = ("adversity", "familiarity")) ->
     (or that has no environment done) raises StageMissing; a part not needed is None when missing."""
     import h5py
 
-    with _open(path) as f:
-        g = _require_stage(f, path, "analysis")
+    with open_file(path) as f:
+        g = require_stage(f, path, "analysis")
         where = f"{path}: /analysis"
-        status = _s(g.attrs.get("status", "?"))
-        types = _list(g, "types", where)
-        envs = _list(g, "environments", where)
-        novel = _list(g, "novel_environments", where)
+        status = text(g.attrs.get("status", "?"))
+        types = list_attr(g, "types", where)
+        envs = list_attr(g, "environments", where)
+        novel = list_attr(g, "novel_environments", where)
         complete = status == "complete"
-        dtw_done = max(0, min(len(envs), _int_attr(g, "dtw_envs_done", len(envs) if complete else 0)))
-        fam_done = max(0, min(len(novel), _int_attr(g, "familiarity_envs_done", len(novel) if complete else 0)))
+        dtw_done = max(0, min(len(envs), int_attr(g, "dtw_envs_done", len(envs) if complete else 0)))
+        fam_done = max(0, min(len(novel), int_attr(g, "familiarity_envs_done", len(novel) if complete else 0)))
         a = Analysis(path=str(path), status=status, types=types, environments=envs, novel_environments=novel,
                      dtw_envs_done=dtw_done, familiarity_envs_done=fam_done, adversity=None, familiarity=None)
         missing = [t for t in TYPES if t not in types]
@@ -282,20 +264,20 @@ def load_analysis(path, need: Tuple[str, ...] = ("adversity", "familiarity")) ->
                                    f"run the analysis stage first)")
             dtw, ws, ties = {}, {}, {}
             for t in TYPES:
-                d = _dataset(f, path, f"analysis/adversity/{t}/dtw")
+                d = dataset(f, path, f"analysis/adversity/{t}/dtw")
                 if d.ndim != 4 or d.shape[0] != len(envs) or d.shape[3] != 2:
                     raise RunFileError(f"{where}/adversity/{t}/dtw: shape {d.shape}, expected "
                                        f"({len(envs)}, replicates, pairs, 2)")
                 dtw[t] = d[:dtw_done].astype(float)
-                ws[t] = _dataset(f, path, f"analysis/adversity/{t}/worse_slot", d.shape[:3])[:dtw_done]
+                ws[t] = dataset(f, path, f"analysis/adversity/{t}/worse_slot", d.shape[:3])[:dtw_done]
                 gt = f[f"analysis/adversity/{t}"]
-                ties[t] = _int_attr(gt, "ties", -1) if "ties" in gt.attrs else None
+                ties[t] = int_attr(gt, "ties", -1) if "ties" in gt.attrs else None
             R = dtw[TYPES[0]].shape[1]
-            rm = _dataset(f, path, "analysis/adversity/replicate_means", (T, 2, R))
-            sm = _dataset(f, path, "analysis/adversity/summary", (T, 2, 3))
-            wl = _dataset(f, path, "analysis/adversity/welch", (2, 3))
+            rm = dataset(f, path, "analysis/adversity/replicate_means", (T, 2, R))
+            sm = dataset(f, path, "analysis/adversity/summary", (T, 2, 3))
+            wl = dataset(f, path, "analysis/adversity/welch", (2, 3))
             ga = f["analysis/adversity"]
-            mism = _int_attr(ga, "deploy_mismatches", -1) if "deploy_mismatches" in ga.attrs else None
+            mism = int_attr(ga, "deploy_mismatches", -1) if "deploy_mismatches" in ga.attrs else None
             return Adversity(types=types, envs=envs[:dtw_done], dtw=dtw, worse_slot=ws, replicate_means=rm,
                              summary=sm, welch=wl, ties=ties, deploy_mismatches=mism)
 
@@ -305,15 +287,15 @@ def load_analysis(path, need: Tuple[str, ...] = ("adversity", "familiarity")) ->
                                    f"({a.progress()}; run the analysis stage first)")
             counts, ns = {}, {}
             for t in TYPES:
-                c = _dataset(f, path, f"analysis/familiarity/{t}/counts")
+                c = dataset(f, path, f"analysis/familiarity/{t}/counts")
                 if c.ndim != 3 or c.shape[0] != len(novel) or c.shape[2] != 6:
                     raise RunFileError(f"{where}/familiarity/{t}/counts: shape {c.shape}, expected "
                                        f"({len(novel)}, replicates, 6)")
                 counts[t] = c[:fam_done].astype(float)
-                ns[t] = _dataset(f, path, f"analysis/familiarity/{t}/n_states", c.shape[:2] + (2,))[:fam_done]
+                ns[t] = dataset(f, path, f"analysis/familiarity/{t}/n_states", c.shape[:2] + (2,))[:fam_done]
             table = None
             if "analysis/familiarity/table" in f and isinstance(f["analysis/familiarity/table"], h5py.Dataset):
-                table = _dataset(f, path, "analysis/familiarity/table", (len(novel), 3, 3))[:fam_done].astype(float)
+                table = dataset(f, path, "analysis/familiarity/table", (len(novel), 3, 3))[:fam_done].astype(float)
             return Familiarity(envs=novel[:fam_done], counts=counts, n_states=ns, table=table)
 
         a.adversity = part("adversity", adversity)
@@ -323,14 +305,12 @@ def load_analysis(path, need: Tuple[str, ...] = ("adversity", "familiarity")) ->
 
 def analysis_status(path) -> Tuple[Optional[str], str]:
     """(status or None when there is no /analysis group, a one-line description) without reading datasets."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        if "analysis" not in f or not isinstance(f["analysis"], h5py.Group):
+    with open_file(path) as f:
+        st = stage_status(f, "analysis")
+        if st is None:
             return None, "the run file has no analysis stage"
         g = f["analysis"]
-        st = _s(g.attrs.get("status", "?"))
-        n_e = len(_list(g, "environments", "")) if "environments" in g.attrs else "?"
-        n_n = len(_list(g, "novel_environments", "")) if "novel_environments" in g.attrs else "?"
-        return st, (f"analysis stage status '{st}' (DTW {_int_attr(g, 'dtw_envs_done', 0)} of {n_e} environments, "
-                    f"familiarity {_int_attr(g, 'familiarity_envs_done', 0)} of {n_n} novel environments)")
+        n_e = len(list_attr(g, "environments", "")) if "environments" in g.attrs else "?"
+        n_n = len(list_attr(g, "novel_environments", "")) if "novel_environments" in g.attrs else "?"
+        return st, (f"analysis stage status '{st}' (DTW {int_attr(g, 'dtw_envs_done', 0)} of {n_e} environments, "
+                    f"familiarity {int_attr(g, 'familiarity_envs_done', 0)} of {n_n} novel environments)")

@@ -1,4 +1,9 @@
-"""Labelled access to a divcoll run file, with the layout taken from the file itself.
+"""The one reader of divcoll run files: every module of divcoll_post and every script reads a run file here.
+
+Two ways in, over the same checked file (root attribute format = "divcoll-run", clear errors otherwise):
+
+- **labelled**: `divcoll_post.open(RUN.h5)` gives every dataset as an xarray.DataArray named by the file's own
+  schema attributes:
 
     import divcoll_post
     with divcoll_post.open("runs/quick.h5") as run:
@@ -8,12 +13,21 @@
         run["deploy/hidden/weak_diverse@diverse/states"]
         print(run.deploy)                               # what the group holds, with each dataset's doc
 
+- **raw** (numpy, what the figures, pages and tables compute with): `open_file(RUN.h5)` is the checked h5py file
+  for a `with` block; `dataset(f, path, name, shape, axes)` reads one dataset as numpy, refusing it when its
+  shape or (where the file names them) its axes are not the expected ones; `list_attr` reads a list attribute
+  (`environments`, `types`, ...: comma-joined strings as every stage writes them, or HDF5 string arrays);
+  `stage_status`, `complete`, `require_stage` and `envs_done` say what a stage holds; `text` decodes an
+  attribute. `STAGES` is the pipeline's stage list.
+
 Every dataset of a run file carries the attributes the run-file schema gives it (src/io/run_file.cpp,
 mpi/README.md "Run-file layout"): `axes` (its dimension names, comma separated), `unit`, `doc` and, for each
-labelled axis, `labels_<axis>` (comma separated). The reader turns those into an xarray.DataArray with
-named dimensions and label coordinates; nothing about shapes, counts or names is written here. Data is
-read when a dataset is first accessed. The file is opened read-only and stays open until close() (or the
-end of a `with` block).
+labelled axis, `labels_<axis>` (comma separated). The labelled reader turns those into an xarray.DataArray with
+named dimensions and label coordinates; nothing about shapes, counts or names is written here. A dataset without
+`axes` (a file written before the schema, or a test's synthetic file) is refused by the labelled reader with a
+message pointing to the raw one, which reads it and checks its axes only where the file names them. Data is
+read when a dataset is first accessed. Files are opened read-only; `open()` stays open until close() (or the end of
+a `with` block), `open_file()` until the end of its `with` block.
 
 Why xarray (Debian's python3-xarray): it is the standard labelled-array library over numpy, so `sel` by
 environment or type name, reductions over named dimensions (`.mean("pair")`) and alignment come for free
@@ -22,17 +36,192 @@ instead of a home-made index layer.
 
 from __future__ import annotations
 
+import contextlib
 import os
-from typing import Dict, Iterator, List, Optional
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .runfile import FORMAT, RunFileError, _decode
-
-try:  # h5py is needed by the whole package; xarray only here
+try:  # h5py is needed by the whole package; xarray only by the labelled reader
     import h5py
 except ImportError as e:  # pragma: no cover - depends on the interpreter
-    raise ImportError("h5py is missing: install Debian's python3-h5py") from e
+    raise ImportError(
+        "h5py is missing: run the post-processing with /usr/bin/python3 (Debian's python3-h5py)"
+    ) from e
+
+FORMAT = "divcoll-run"
+# the pipeline's stages in order (src/config/pipeline.hpp's stage list): every stage group a run file can hold
+STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
+
+
+class RunFileError(Exception):
+    """The file is not a readable divcoll run file, or lacks what was asked for."""
+
+
+class NotARunFile(RunFileError):
+    """An HDF5 file whose root attribute `format` is missing or not "divcoll-run" (`fmt`: what it is, or None)."""
+
+    def __init__(self, message: str, fmt: Optional[str]):
+        super().__init__(message)
+        self.fmt = fmt
+
+
+class StageMissing(RunFileError):
+    """The run file lacks the stage (or the part of it) a figure, table or page needs."""
+
+
+# ---- attributes ---------------------------------------------------------------------------------------------------
+
+def _decode(v):
+    if isinstance(v, (bytes, np.bytes_)):
+        return v.decode("utf-8", "replace")
+    if isinstance(v, np.ndarray) and v.shape == ():
+        return _decode(v[()])
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def text(v) -> str:
+    """an HDF5 attribute or string value as text (bytes decoded, 0-d arrays and numpy scalars unwrapped)"""
+    v = _decode(v)
+    return v if isinstance(v, str) else str(v)
+
+
+_MISSING = object()
+
+
+def list_attr(g, name: str, where: Optional[str] = None, default=_MISSING) -> List[str]:
+    """The list attribute `name` of a group (or file): a comma-joined string, as every stage writes its lists, or
+    an HDF5 string array; items stripped, empty ones dropped. Missing: `default` when given, else RunFileError
+    naming `where` (default: the group's path)."""
+    if name not in g.attrs:
+        if default is not _MISSING:
+            return default
+        raise RunFileError(f"{where if where is not None else g.name}: attribute '{name}' missing")
+    v = g.attrs[name]
+    if isinstance(v, np.ndarray) and v.ndim == 1:
+        return [text(x).strip() for x in v if text(x).strip()]
+    return [x.strip() for x in text(v).split(",") if x.strip()]
+
+
+def int_attr(g, name: str, default: int) -> int:
+    """an integer attribute, or `default` when missing or not a number"""
+    if name not in g.attrs:
+        return default
+    try:
+        return int(_decode(g.attrs[name]))
+    except (TypeError, ValueError):
+        return default
+
+
+# ---- the raw file ---------------------------------------------------------------------------------------------------
+
+def _checked_file(path) -> "h5py.File":
+    """the run file open read-only after checking it is one; RunFileError (a message for the user) otherwise"""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise RunFileError(f"{path}: no such file")
+    if not os.path.isfile(path):
+        raise RunFileError(f"{path}: not a regular file")
+    try:
+        is_h5 = h5py.is_hdf5(path)
+    except OSError as e:
+        raise RunFileError(f"{path}: cannot read ({e})") from e
+    if not is_h5:
+        raise RunFileError(
+            f"{path}: not an HDF5 file (expected a divcoll run file, format \"{FORMAT}\")"
+        )
+    try:
+        f = h5py.File(path, "r")
+    except OSError as e:
+        msg = str(e)
+        low = msg.lower()
+        if "truncated" in low:
+            hint = "truncated file: copied or written only in part?"
+        elif "unable to lock" in low or "file locking" in low:
+            hint = "locked: is divcoll still writing it?"
+        else:
+            hint = "damaged or truncated file"
+        raise RunFileError(f"{path}: cannot open as HDF5 ({hint}): {msg}") from e
+    try:
+        fmt = _decode(f.attrs.get("format")) if "format" in f.attrs else None
+    except OSError as e:
+        f.close()
+        raise RunFileError(f"{path}: read error (truncated or damaged file?): {e}") from e
+    if fmt is None:
+        f.close()
+        raise NotARunFile(
+            f"{path}: HDF5 file without a 'format' attribute: not a divcoll run file "
+            f"(expected format \"{FORMAT}\")", None
+        )
+    if fmt != FORMAT:
+        f.close()
+        raise NotARunFile(
+            f"{path}: format is \"{fmt}\", not \"{FORMAT}\": not a divcoll run file"
+            + (" (scene and trajectory files are read by `divcoll simulate`)" if "divcoll" in str(fmt) else ""),
+            str(fmt),
+        )
+    return f
+
+
+@contextlib.contextmanager
+def open_file(path) -> Iterator["h5py.File"]:
+    """The run file as a read-only h5py.File for a `with` block, after checking it is one; RunFileError otherwise
+    (also for a read error inside the block: a truncated or damaged file)."""
+    f = _checked_file(path)
+    try:
+        yield f
+    except OSError as e:  # a read past the end of a truncated file, a damaged chunk
+        raise RunFileError(f"{os.fspath(path)}: read error (truncated or damaged file?): {e}") from e
+    finally:
+        f.close()
+
+
+def stage_status(f, stage: str) -> Optional[str]:
+    """the stage's `status` attribute ("complete", "running", ...), "?" when it has none, None without the group"""
+    if stage not in f or not isinstance(f[stage], h5py.Group):
+        return None
+    return text(f[stage].attrs.get("status", "?"))
+
+
+def complete(f, stage: str) -> bool:
+    """the stage is in the file with status complete"""
+    return stage_status(f, stage) == "complete"
+
+
+def require_stage(f, path, stage: str):
+    """the stage's group; StageMissing without it"""
+    if stage not in f or not isinstance(f[stage], h5py.Group):
+        raise StageMissing(f"{path}: run file has no {stage} stage (run the {stage} stage first)")
+    return f[stage]
+
+
+def dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None,
+            axes: Optional[Sequence[str]] = None) -> np.ndarray:
+    """The dataset `name` as numpy, refused unless it has `shape` and (when the file names its axes: the run-file
+    schema's `axes` attribute) the axes `axes`. StageMissing when it is not there."""
+    if name not in f or not isinstance(f[name], h5py.Dataset):
+        stage = name.split("/")[0]
+        st = text(f[stage].attrs.get("status", "?")) if stage in f else "absent"
+        raise StageMissing(f"{path}: /{name} missing (the {stage} stage has status '{st}': "
+                           f"run the {stage} stage to the end first)")
+    d = f[name]
+    if shape is not None and tuple(d.shape) != tuple(shape):
+        raise RunFileError(f"{path}: /{name} has shape {d.shape}, expected {tuple(shape)}")
+    if axes is not None and "axes" in d.attrs and text(d.attrs["axes"]) != ",".join(axes):
+        raise RunFileError(f"{path}: /{name} has axes {text(d.attrs['axes'])}, expected {','.join(axes)}")
+    return d[()]
+
+
+def envs_done(g, n: int) -> int:
+    """how many of a stage's n environments are done: its `envs_done`, else all when complete, else none"""
+    if "envs_done" in g.attrs:
+        return max(0, min(n, int(_decode(g.attrs["envs_done"]))))
+    return n if text(g.attrs.get("status", "")) == "complete" else 0
+
+
+# ---- the labelled reader ----------------------------------------------------------------------------------------------
 
 
 def _xarray():
@@ -65,7 +254,7 @@ def data_array(dataset: "h5py.Dataset"):
     if "axes" not in attrs:
         raise RunFileError(
             f"{dataset.file.filename}: {dataset.name} has no 'axes' attribute (a run file written before the "
-            "run-file schema, or not a divcoll run file): read it with h5py or divcoll_post.results"
+            "run-file schema, or a synthetic file): read it with divcoll_post.reader.open_file and dataset"
         )
     dims = _split(attrs["axes"])
     if len(dims) != dataset.ndim:
@@ -158,15 +347,7 @@ class Run(Group):
 
     def __init__(self, path):
         self.path = os.fspath(path)
-        if not os.path.isfile(self.path):
-            raise RunFileError(f"{self.path}: no such file")
-        if not h5py.is_hdf5(self.path):
-            raise RunFileError(f"{self.path}: not an HDF5 file (expected a divcoll run file)")
-        f = h5py.File(self.path, "r")
-        fmt = _decode(f.attrs.get("format", ""))
-        if fmt != FORMAT:
-            f.close()
-            raise RunFileError(f"{self.path}: format is {fmt!r}, not {FORMAT!r}: not a divcoll run file")
+        f = _checked_file(self.path)
         super().__init__(f)
         self._file = f
 

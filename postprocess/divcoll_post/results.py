@@ -37,7 +37,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .runfile import RunFileError, RunMeta, _decode, _open, _meta, text
+from .reader import (RunFileError, StageMissing, dataset, envs_done, list_attr, open_file, require_stage,  # noqa: F401
+                     text)
+from .runfile import RunMeta, _meta
 
 BOOT_RESAMPLES = 1000
 BOOT_SEED = 0
@@ -51,10 +53,6 @@ KIND_LABEL = {
     "strong_uniform": "strong, uniform-trained",
     "strong_diverse": "strong, diverse-trained",
 }
-
-
-class StageMissing(RunFileError):
-    """The run file lacks the stage (or the part of it) a figure needs."""
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -80,6 +78,27 @@ def ok_mean(travel, status) -> Tuple[float, int]:
     """(mean over ok episodes, count of not-ok episodes); the mean is NaN when no episode is ok."""
     v = ok_values(travel, status)
     return (float(v.mean()) if v.size else float("nan")), n_not_ok(travel, status)
+
+
+def ok_means(travel, status, axis):
+    """(mean over `axis` of the ok entries (status 0, finite travel), NaN where none; the ok counts): the ok mean of
+    every cell of an array at once (e.g. axis 3 of deploy's (env, type, replicate, pair) collectives)"""
+    travel = np.asarray(travel, float)
+    ok = (np.asarray(status) == 0) & np.isfinite(travel)
+    n = ok.sum(axis=axis)
+    s = np.where(ok, travel, 0.0).sum(axis=axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, s / np.maximum(n, 1), np.nan), n
+
+
+def env_means(travel, status) -> Tuple[np.ndarray, int]:
+    """(ok mean of each environment of arrays shaped (E, ...), count of not-ok episodes over all of them)"""
+    out, bad = [], 0
+    for e in range(np.shape(travel)[0]):
+        m, b = ok_mean(travel[e], status[e])
+        out.append(m)
+        bad += b
+    return np.array(out), bad
 
 
 def sem(values) -> float:
@@ -172,48 +191,6 @@ def stat(groups: Sequence[Tuple[np.ndarray, np.ndarray]], err: str = "ci",
 # reading
 
 
-_s = text
-
-
-def _list_attr(g, name: str, where: str) -> List[str]:
-    if name not in g.attrs:
-        raise RunFileError(f"{where}: attribute '{name}' missing")
-    return [x for x in _s(g.attrs[name]).split(",") if x]
-
-
-def _require_stage(f, path, stage: str):
-    import h5py
-
-    if stage not in f or not isinstance(f[stage], h5py.Group):
-        raise StageMissing(f"{path}: run file has no {stage} stage (run the {stage} stage first)")
-    return f[stage]
-
-
-def _dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None,
-             axes: Optional[Tuple[str, ...]] = None) -> np.ndarray:
-    """The dataset `name`, refused unless it has `shape` and (when the file names its axes: the run-file
-    schema's `axes` attribute) the axes `axes`."""
-    import h5py
-
-    if name not in f or not isinstance(f[name], h5py.Dataset):
-        stage = name.split("/")[0]
-        st = _s(f[stage].attrs.get("status", "?")) if stage in f else "absent"
-        raise StageMissing(f"{path}: /{name} missing (the {stage} stage has status '{st}': "
-                           f"run the {stage} stage to the end first)")
-    d = f[name]
-    if shape is not None and tuple(d.shape) != tuple(shape):
-        raise RunFileError(f"{path}: /{name} has shape {d.shape}, expected {tuple(shape)}")
-    if axes is not None and "axes" in d.attrs and _s(d.attrs["axes"]) != ",".join(axes):
-        raise RunFileError(f"{path}: /{name} has axes {_s(d.attrs['axes'])}, expected {','.join(axes)}")
-    return d[()]
-
-
-def _envs_done(g, n: int) -> int:
-    if "envs_done" in g.attrs:
-        return max(0, min(n, int(_decode(g.attrs["envs_done"]))))
-    return n if _s(g.attrs.get("status", "")) == "complete" else 0
-
-
 def _config(meta: RunMeta) -> dict:
     if not meta.config:
         return {}
@@ -280,20 +257,20 @@ class Deploy:
 
 
 def load_deploy(path) -> Deploy:
-    with _open(path) as f:
-        g = _require_stage(f, path, "deploy")
+    with open_file(path) as f:
+        g = require_stage(f, path, "deploy")
         where = f"{path}: /deploy"
-        envs = _list_attr(g, "environments", where)
-        types = _list_attr(g, "types", where)
-        done = _envs_done(g, len(envs))
+        envs = list_attr(g, "environments", where)
+        types = list_attr(g, "types", where)
+        done = envs_done(g, len(envs))
         if done == 0:
             raise StageMissing(f"{path}: the deploy stage has no finished environment yet "
-                               f"(status '{_s(g.attrs.get('status', '?'))}'; run the deploy stage first)")
+                               f"(status '{text(g.attrs.get('status', '?'))}'; run the deploy stage first)")
         alone, pairs = ("env", "agent"), ("env", "type", "replicate", "pair")
-        at = _dataset(f, path, "deploy/agents/travel_bl", axes=alone)
-        ast = _dataset(f, path, "deploy/agents/status", at.shape, alone)
-        ct = _dataset(f, path, "deploy/collectives/travel_bl", axes=pairs)
-        cst = _dataset(f, path, "deploy/collectives/status", ct.shape, pairs)
+        at = dataset(f, path, "deploy/agents/travel_bl", axes=alone)
+        ast = dataset(f, path, "deploy/agents/status", at.shape, alone)
+        ct = dataset(f, path, "deploy/collectives/travel_bl", axes=pairs)
+        cst = dataset(f, path, "deploy/collectives/status", ct.shape, pairs)
         if at.ndim != 2 or at.shape[0] != len(envs):
             raise RunFileError(f"{where}/agents/travel_bl: shape {at.shape}, expected ({len(envs)}, population)")
         if ct.ndim != 4 or ct.shape[0] != len(envs) or ct.shape[1] != len(types):
@@ -302,7 +279,7 @@ def load_deploy(path) -> Deploy:
         dp = f["deploy/diverse_pairs"][()] if "deploy/diverse_pairs" in f else None
         return Deploy(envs=envs[:done], types=types, agents_travel=at[:done], agents_status=ast[:done],
                       coll_travel=ct[:done], coll_status=cst[:done], envs_total=len(envs),
-                      status=_s(g.attrs.get("status", "?")), diverse_pairs=dp)
+                      status=text(g.attrs.get("status", "?")), diverse_pairs=dp)
 
 
 @dataclasses.dataclass
@@ -327,25 +304,25 @@ class Scaling:
 
 
 def load_scaling(path) -> Scaling:
-    with _open(path) as f:
-        g = _require_stage(f, path, "scaling")
+    with open_file(path) as f:
+        g = require_stage(f, path, "scaling")
         where = f"{path}: /scaling"
-        envs = _list_attr(g, "environments", where)
-        done = _envs_done(g, len(envs))
+        envs = list_attr(g, "environments", where)
+        done = envs_done(g, len(envs))
         if done == 0:
             raise StageMissing(f"{path}: the scaling stage has no finished environment yet "
-                               f"(status '{_s(g.attrs.get('status', '?'))}'; run the scaling stage first)")
-        sizes = [int(x) for x in np.asarray(_dataset(f, path, "scaling/sizes")).ravel()]
+                               f"(status '{text(g.attrs.get('status', '?'))}'; run the scaling stage first)")
+        sizes = [int(x) for x in np.asarray(dataset(f, path, "scaling/sizes")).ravel()]
         chains = ("env", "size", "variant", "replicate", "draw")
-        t = _dataset(f, path, "scaling/travel_bl", axes=chains)
-        st = _dataset(f, path, "scaling/status", t.shape, chains)
-        if "variants" in g.attrs and tuple(_list_attr(g, "variants", where)) != Scaling.VARIANTS:
-            raise RunFileError(f"{where}: variants {_s(g.attrs['variants'])}, expected {','.join(Scaling.VARIANTS)}")
+        t = dataset(f, path, "scaling/travel_bl", axes=chains)
+        st = dataset(f, path, "scaling/status", t.shape, chains)
+        if "variants" in g.attrs and tuple(list_attr(g, "variants", where)) != Scaling.VARIANTS:
+            raise RunFileError(f"{where}: variants {text(g.attrs['variants'])}, expected {','.join(Scaling.VARIANTS)}")
         if t.ndim != 5 or t.shape[0] != len(envs) or t.shape[1] != len(sizes) or t.shape[2] != 2:
             raise RunFileError(f"{where}/travel_bl: shape {t.shape}, expected "
                                f"({len(envs)}, {len(sizes)}, 2, replicates, draws)")
         return Scaling(envs=envs[:done], sizes=sizes, travel=t[:done], status=st[:done],
-                       envs_total=len(envs), stage_status=_s(g.attrs.get("status", "?")))
+                       envs_total=len(envs), stage_status=text(g.attrs.get("status", "?")))
 
 
 @dataclasses.dataclass
@@ -378,16 +355,16 @@ class Specialists:
 
 
 def load_specialists(path) -> Specialists:
-    with _open(path) as f:
-        g = _require_stage(f, path, "specialists")
-        envs = _list_attr(g, "environments", f"{path}: /specialists")
+    with open_file(path) as f:
+        g = require_stage(f, path, "specialists")
+        envs = list_attr(g, "environments", f"{path}: /specialists")
         spec = ("env", "replicate", "pair")
-        t = _dataset(f, path, "specialists/travel_bl", axes=spec)
-        st = _dataset(f, path, "specialists/status", t.shape, spec)
+        t = dataset(f, path, "specialists/travel_bl", axes=spec)
+        st = dataset(f, path, "specialists/status", t.shape, spec)
         if t.ndim != 3 or t.shape[0] != len(envs):
             raise RunFileError(f"{path}: /specialists/travel_bl: shape {t.shape}, expected "
                                f"({len(envs)}, replicates, pairs)")
-        return Specialists(envs=envs, travel=t, status=st, stage_status=_s(g.attrs.get("status", "?")))
+        return Specialists(envs=envs, travel=t, status=st, stage_status=text(g.attrs.get("status", "?")))
 
 
 @dataclasses.dataclass
@@ -435,37 +412,37 @@ def load_graded(path) -> List[GradedPopulation]:
     status is not complete raises StageMissing."""
     import h5py
 
-    with _open(path) as f:
-        g = _require_stage(f, path, "graded")
+    with open_file(path) as f:
+        g = require_stage(f, path, "graded")
         where = f"{path}: /graded"
-        envs = _list_attr(g, "environments", where)
-        pops = _list_attr(g, "populations", where)
+        envs = list_attr(g, "environments", where)
+        pops = list_attr(g, "populations", where)
         out = []
         for p in pops:
             if p not in g or not isinstance(g[p], h5py.Group):
                 raise StageMissing(f"{where}/{p} missing (the graded stage has status "
-                                   f"'{_s(g.attrs.get('status', '?'))}': run the graded stage to the end first)")
+                                   f"'{text(g.attrs.get('status', '?'))}': run the graded stage to the end first)")
             gp = g[p]
-            if _s(gp.attrs.get("status", "")) != "complete":
-                raise StageMissing(f"{where}/{p} has status '{_s(gp.attrs.get('status', '?'))}' "
+            if text(gp.attrs.get("status", "")) != "complete":
+                raise StageMissing(f"{where}/{p} has status '{text(gp.attrs.get('status', '?'))}' "
                                    f"(run the graded stage to the end first)")
             base = f"graded/{p}/deploy"
             alone, pairs = ("env", "agent"), ("env", "replicate", "pair")
-            at = _dataset(f, path, f"{base}/agents/travel_bl", axes=alone)
-            ast = _dataset(f, path, f"{base}/agents/status", at.shape, alone)
-            pt = _dataset(f, path, f"{base}/pairs/travel_bl", axes=pairs)
-            pst = _dataset(f, path, f"{base}/pairs/status", pt.shape, pairs)
+            at = dataset(f, path, f"{base}/agents/travel_bl", axes=alone)
+            ast = dataset(f, path, f"{base}/agents/status", at.shape, alone)
+            pt = dataset(f, path, f"{base}/pairs/travel_bl", axes=pairs)
+            pst = dataset(f, path, f"{base}/pairs/status", pt.shape, pairs)
             if at.ndim != 2 or at.shape[0] != len(envs) or pt.ndim != 3 or pt.shape[0] != len(envs):
                 raise RunFileError(f"{where}/{p}/deploy: shapes {at.shape} and {pt.shape}, expected "
                                    f"({len(envs)}, population) and ({len(envs)}, replicates, pairs)")
-            src = [x.strip() for x in _s(gp.attrs.get("diversity_sources", "")).split(",") if x.strip()]
+            src = list_attr(gp, "diversity_sources", default=[])
             out.append(GradedPopulation(name=p, diversity_sources=src, envs=envs, agents_travel=at,
                                         agents_status=ast, pairs_travel=pt, pairs_status=pst))
         return out
 
 
 def load_meta(path) -> RunMeta:
-    with _open(path) as f:
+    with open_file(path) as f:
         return _meta(f, path)
 
 

@@ -7,29 +7,31 @@ Layout read here (agents stage; mpi/README.md "Run-file layout", SPEC §9):
     /agents/final     the final population, one row per agent
     /agents/gen_NNN   every candidate of generation NNN, same datasets plus `survived`
 
-Every function opens the file, reads what it needs into numpy arrays and closes it again; nothing is
-ever written. Problems with the file (missing, not HDF5, truncated, another format, a stage that is
+Every function opens the file with the reader (reader.open_file), reads what it needs into numpy arrays
+and closes it again; nothing is ever written. Problems with the file (missing, not HDF5, truncated, another format, a stage that is
 not there, a dataset of the wrong shape) raise RunFileError with a message meant for the user.
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import os
 import re
-from typing import Dict, Iterator, List, Optional
+from typing import Dict, List, Optional
 
+import h5py
 import numpy as np
 
-try:
-    import h5py
-except ImportError as e:  # pragma: no cover - depends on the interpreter
-    raise ImportError(
-        "h5py is missing: run the post-processing with /usr/bin/python3 (Debian's python3-h5py)"
-    ) from e
+# the reader's basics, also reachable from here
+from .reader import (  # noqa: F401
+    FORMAT,
+    STAGES,
+    RunFileError,
+    _decode,
+    open_file,
+    text,
+)
 
-FORMAT = "divcoll-run"
 STATUS_NAMES = {0: "ok", 1: "nan", 2: "unstable"}
 
 # name -> (dtype kind, the axes after the row axis `agent`; None = any). The lengths of those axes are the
@@ -52,10 +54,6 @@ _AGENT_DATASETS = {
     "status": ("iu", ()),
 }
 _GEN_RE = re.compile(r"^gen_(\d+)$")
-
-
-class RunFileError(Exception):
-    """The file is not a readable divcoll run file, or lacks what was asked for."""
 
 
 @dataclasses.dataclass
@@ -109,78 +107,11 @@ class Population:
         return x.max(axis=1) - x.min(axis=1)
 
 
-# the pipeline's stages in order (src/config/pipeline.hpp's stage list): every stage group a run file can hold
-STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
-
-
-def text(v) -> str:
-    """an HDF5 attribute or string value as text (bytes decoded, 0-d arrays and numpy scalars unwrapped)"""
-    v = _decode(v)
-    return v if isinstance(v, str) else str(v)
-
-
-def _decode(v):
-    if isinstance(v, (bytes, np.bytes_)):
-        return v.decode("utf-8", "replace")
-    if isinstance(v, np.ndarray) and v.shape == ():
-        return _decode(v[()])
-    if isinstance(v, np.generic):
-        return v.item()
-    return v
-
-
 def _int_or_none(v) -> Optional[int]:
     try:
         return None if v is None else int(v)
     except (TypeError, ValueError):
         return None
-
-
-@contextlib.contextmanager
-def _open(path) -> Iterator["h5py.File"]:
-    """Open a run file read-only after checking it is one; RunFileError otherwise."""
-    path = os.fspath(path)
-    if not os.path.exists(path):
-        raise RunFileError(f"{path}: no such file")
-    if not os.path.isfile(path):
-        raise RunFileError(f"{path}: not a regular file")
-    try:
-        is_h5 = h5py.is_hdf5(path)
-    except OSError as e:
-        raise RunFileError(f"{path}: cannot read ({e})") from e
-    if not is_h5:
-        raise RunFileError(
-            f"{path}: not an HDF5 file (expected a divcoll run file, format \"{FORMAT}\")"
-        )
-    try:
-        f = h5py.File(path, "r")
-    except OSError as e:
-        msg = str(e)
-        low = msg.lower()
-        if "truncated" in low:
-            hint = "truncated file: copied or written only in part?"
-        elif "unable to lock" in low or "file locking" in low:
-            hint = "locked: is divcoll still writing it?"
-        else:
-            hint = "damaged or truncated file"
-        raise RunFileError(f"{path}: cannot open as HDF5 ({hint}): {msg}") from e
-    try:
-        fmt = _decode(f.attrs.get("format")) if "format" in f.attrs else None
-        if fmt is None:
-            raise RunFileError(
-                f"{path}: HDF5 file without a 'format' attribute: not a divcoll run file "
-                f"(expected format \"{FORMAT}\")"
-            )
-        if fmt != FORMAT:
-            raise RunFileError(
-                f"{path}: format is \"{fmt}\", not \"{FORMAT}\" (a divcoll run file is expected"
-                + (": scene and trajectory files are read by `divcoll simulate`)" if "divcoll" in str(fmt) else ")")
-            )
-        yield f
-    except OSError as e:  # a read past the end of a truncated file, a damaged chunk
-        raise RunFileError(f"{path}: read error (truncated or damaged file?): {e}") from e
-    finally:
-        f.close()
 
 
 def _run_name(config: Optional[str]) -> Optional[str]:
@@ -230,7 +161,7 @@ def _meta(f, path) -> RunMeta:
 
 def read_meta(path) -> RunMeta:
     """Root attributes (provenance, config, seed) and the agents stage's status."""
-    with _open(path) as f:
+    with open_file(path) as f:
         return _meta(f, path)
 
 
@@ -289,13 +220,13 @@ def _read_population(f, path, group: str, params: bool) -> Population:
 
 def read_final(path, params: bool = True) -> Population:
     """The final population (/agents/final). params=False skips the (M × weights) controller weights."""
-    with _open(path) as f:
+    with open_file(path) as f:
         return _read_population(f, path, "agents/final", params)
 
 
 def list_generations(path) -> List[int]:
     """Indices of the stored generations (/agents/gen_NNN), ascending; [] if none."""
-    with _open(path) as f:
+    with open_file(path) as f:
         if "agents" not in f or not isinstance(f["agents"], h5py.Group):
             return []
         gens = []
@@ -309,7 +240,7 @@ def list_generations(path) -> List[int]:
 def read_generation(path, gen: int, params: bool = True) -> Population:
     """Every candidate of generation `gen` (/agents/gen_NNN), with `survived`."""
     gen = int(gen)
-    with _open(path) as f:
+    with open_file(path) as f:
         name = f"gen_{gen:03d}"
         if "agents" in f and isinstance(f["agents"], h5py.Group) and name not in f["agents"]:
             for k in f["agents"]:  # tolerate another zero padding

@@ -16,7 +16,8 @@ import tomllib
 from typing import List, Optional, Tuple
 
 from . import verdicts as V
-from .runfile import STAGES, RunFileError, read_meta
+from .reader import STAGES, RunFileError, open_file, stage_status
+from .runfile import read_meta
 
 HELD, NOT_HELD, TOO_SMALL, NOT_MEASURED = "held", "did not hold", "too small to judge", "not measured"
 VERDICTS = (HELD, NOT_HELD, TOO_SMALL, NOT_MEASURED)
@@ -91,14 +92,13 @@ def protocol_of(cfg) -> str:
 
 def _stage_notes(path, stages) -> str:
     """why the stages a claim needs are not there: 'analysis stage status 'running'', 'no analysis stage ...'"""
-    import h5py
     notes = []
-    with h5py.File(path, "r") as f:
+    with open_file(path) as f:
         for st in stages:
-            if st not in f:
+            status = stage_status(f, st)
+            if status is None:
                 notes.append(f"no {st} stage in the run file")
             else:
-                status = V._s(f[st].attrs.get("status", "?"))
                 if status != "complete":
                     notes.append(f"{st} stage status '{status}'")
     return "; ".join(notes)

@@ -316,9 +316,9 @@ def judge_study(folder: str, B: int = V.B_DEFAULT) -> Judged:
     return Judged(man, main, supp, judge_family(main, "M", B=B) + judge_family(supp, "S", B=B))
 
 
-def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "") -> str:
+def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: bool = False) -> str:
     """the page DIR/verdicts.md with its figures; with readme, also that README's results table (readme_lines),
-    from the same judging"""
+    from the same judging; with html, also DIR/verdicts.html (write_html)"""
     os.makedirs(out, exist_ok=True)
     j = judge_study(folder, B)
     man, main, supp, res = j.man, j.main, j.supp, j.res
@@ -408,7 +408,19 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "") -> str:
     path = os.path.join(out, "verdicts.md")
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
+    if html:
+        write_html(out, man["name"])
     return path
+
+
+def write_html(out: str, study: str) -> str:
+    """out/verdicts.html: the verdict page out/verdicts.md as one self-contained HTML page (report_html's writer:
+    the same tables, the forest plot and the figures embedded)"""
+    from . import report_html
+    with open(os.path.join(out, "verdicts.md")) as fh:
+        md = fh.read()
+    return report_html.write(study, out, md, name="verdicts.html", title=f"divcoll verdicts: study {study}",
+                             css=report_html.CSS + report_html.VERDICT_CSS)
 
 
 class Paired:

@@ -31,28 +31,8 @@ WU, WD = "weak_uniform@uniform", "weak_diverse@diverse"
 SEVERE = 0.25  # "severe": a relative drop of more than a quarter (protocol §5)
 
 
-from .runfile import text as _s  # noqa: E402
-
-
-def _list_attr(g, name):
-    v = g.attrs[name]
-    if isinstance(v, np.ndarray) and v.ndim == 1:
-        return [_s(x) for x in v if _s(x)]
-    return [x.strip() for x in _s(v).split(",") if x.strip()]
-
-
-def _ok_means(travel, status, axis):
-    """mean over `axis` of the ok (status 0, finite) entries; NaN where none; and the ok counts"""
-    travel = np.asarray(travel, float)
-    ok = (np.asarray(status) == 0) & np.isfinite(travel)
-    n = ok.sum(axis=axis)
-    s = np.where(ok, travel, 0.0).sum(axis=axis)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(n > 0, s / np.maximum(n, 1), np.nan), n
-
-
-def _complete(f, stage):
-    return stage in f and _s(f[stage].attrs.get("status", "")) == "complete"
+from .reader import complete, list_attr, open_file, text as _s  # noqa: E402
+from .results import ok_means  # noqa: E402
 
 
 def _lists(a):
@@ -63,15 +43,14 @@ def _lists(a):
 
 def extract(path: str) -> dict:
     """the arrays the protocol reads, from a run file (stages that are not complete are left out)"""
-    import h5py
     out = {"format": ARRAYS_FORMAT, "version": ARRAYS_VERSION, "run_file": os.path.basename(path)}
-    with h5py.File(path, "r") as f:
+    with open_file(path) as f:
         cfg = tomllib.loads(_s(f.attrs["config"])) if "config" in f.attrs else {}
         out["seed"] = cfg.get("run", {}).get("seed")
         out["git_commit"] = _s(f.attrs.get("git_commit", ""))
         out["episode_steps"] = {"connectors": cfg.get("connectors", {}).get("episode_steps"),
                                 "deploy": cfg.get("deploy", {}).get("episode_steps")}
-        if _complete(f, "agents"):
+        if complete(f, "agents"):
             fit = f["agents/final/fitness"][()]
             out["agents"] = {"fitness_mean": float(np.mean(fit)), "fitness_sd": float(np.std(fit))}
             if "agents/gen_000/curve_u" in f:
@@ -79,25 +58,25 @@ def extract(path: str) -> dict:
                 fit, tu = f["agents/gen_000/fitness"][()], f["agents/gen_000/travel_u"][()]
                 bl = np.where(fit != 0, tu / np.where(fit == 0, 1, fit), np.nan)
                 out["agents"]["gen0_mean"] = float(np.nanmean(c / bl))
-        if _complete(f, "connectors"):
-            kinds = _list_attr(f["connectors"], "kinds")
+        if complete(f, "connectors"):
+            kinds = list_attr(f["connectors"], "kinds")
             out["connectors"] = {"untrained_bl": {k: _lists(f[f"connectors/{k}/curve_bl"][()][0]) for k in kinds
                                                   if f"connectors/{k}/curve_bl" in f}}
-        if _complete(f, "deploy"):
+        if complete(f, "deploy"):
             d = f["deploy"]
-            envs, types = _list_attr(d, "environments"), _list_attr(d, "types")
-            alone, _ = _ok_means(d["agents/travel_bl"][()], d["agents/status"][()], 1)
-            coll, nok = _ok_means(d["collectives/travel_bl"][()], d["collectives/status"][()], 3)  # (E, T, R)
+            envs, types = list_attr(d, "environments"), list_attr(d, "types")
+            alone, _ = ok_means(d["agents/travel_bl"][()], d["agents/status"][()], 1)
+            coll, nok = ok_means(d["collectives/travel_bl"][()], d["collectives/status"][()], 3)  # (E, T, R)
             dep = {"environments": envs, "types": types, "alone_bl": _lists(alone), "collectives_bl": _lists(coll),
                    "collectives_ok": np.asarray(nok).tolist()}
             if "agents/travel_bl_early" in d and cfg.get("deploy", {}).get("early_step", 0) > 0:
-                dep["alone_bl_early"] = _lists(_ok_means(d["agents/travel_bl_early"][()], d["agents/status"][()], 1)[0])
+                dep["alone_bl_early"] = _lists(ok_means(d["agents/travel_bl_early"][()], d["agents/status"][()], 1)[0])
                 dep["early_step"] = cfg["deploy"]["early_step"]
             out["deploy"] = dep
-        if _complete(f, "analysis"):
+        if complete(f, "analysis"):
             a = f["analysis"]
             adv, fam = {}, {}
-            for t in _list_attr(a, "types"):
+            for t in list_attr(a, "types"):
                 g = a[f"adversity/{t}"]
                 dtw, ws = g["dtw"][()], g["worse_slot"][()]  # (E, R, P, 2), (E, R, P)
                 worse = np.take_along_axis(dtw, ws[..., None].astype(int), axis=3)[..., 0]
@@ -108,26 +87,26 @@ def extract(path: str) -> dict:
                               "better": _lists(np.nanmean(better, axis=(0, 2)))}
                 c = a[f"familiarity/{t}/counts"][()]  # (E_novel, R, 6)
                 fam[t] = _lists(c[..., :3])
-            out["analysis"] = {"novel_environments": _list_attr(a, "novel_environments"), "dtw": adv,
+            out["analysis"] = {"novel_environments": list_attr(a, "novel_environments"), "dtw": adv,
                                "familiarity": fam}
-        if _complete(f, "specialists"):
+        if complete(f, "specialists"):
             s = f["specialists"]
-            m, _ = _ok_means(s["travel_bl"][()], s["status"][()], 2)  # (E_s, R_s)
-            out["specialists"] = {"environments": _list_attr(s, "environments"), "travel_bl": _lists(m)}
-        if _complete(f, "scaling"):
+            m, _ = ok_means(s["travel_bl"][()], s["status"][()], 2)  # (E_s, R_s)
+            out["specialists"] = {"environments": list_attr(s, "environments"), "travel_bl": _lists(m)}
+        if complete(f, "scaling"):
             sc = f["scaling"]
-            m, _ = _ok_means(sc["travel_bl"][()], sc["status"][()], 4)  # (E, S, 2, R)
-            out["scaling"] = {"environments": _list_attr(sc, "environments"), "sizes": [int(x) for x in sc["sizes"][()]],
+            m, _ = ok_means(sc["travel_bl"][()], sc["status"][()], 4)  # (E, S, 2, R)
+            out["scaling"] = {"environments": list_attr(sc, "environments"), "sizes": [int(x) for x in sc["sizes"][()]],
                               "travel_bl": _lists(m)}
-        if _complete(f, "graded"):
+        if complete(f, "graded"):
             g = f["graded"]
             pops = {}
-            for pop in _list_attr(g, "populations") if "populations" in g.attrs else ["same_shape", "same_shape_springs"]:
+            for pop in list_attr(g, "populations"):
                 gp = g[pop]
-                al, _ = _ok_means(gp["deploy/agents/travel_bl"][()], gp["deploy/agents/status"][()], 1)
-                pa, _ = _ok_means(gp["deploy/pairs/travel_bl"][()], gp["deploy/pairs/status"][()], 2)  # (E, R)
+                al, _ = ok_means(gp["deploy/agents/travel_bl"][()], gp["deploy/agents/status"][()], 1)
+                pa, _ = ok_means(gp["deploy/pairs/travel_bl"][()], gp["deploy/pairs/status"][()], 2)  # (E, R)
                 pops[pop] = {"alone_bl": _lists(al), "pairs_bl": _lists(pa)}
-            out["graded"] = {"environments": _list_attr(g, "environments"), "populations": pops}
+            out["graded"] = {"environments": list_attr(g, "environments"), "populations": pops}
     return out
 
 

@@ -14,7 +14,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-import fig_scaling as F  # noqa: E402
+from divcoll_post.figures import fig_scaling as F  # noqa: E402
 
 
 def factors(dirs):

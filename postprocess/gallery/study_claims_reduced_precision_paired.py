@@ -10,7 +10,7 @@ import numpy as np
 from scipy import stats
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from robustness import SummaryRun, t_interval  # noqa: E402
+from divcoll_post.robustness import SummaryRun, t_interval  # noqa: E402
 
 VARIANTS = ("baseline", "float_networks")
 

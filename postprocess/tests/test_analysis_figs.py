@@ -20,10 +20,10 @@ sys.path.insert(0, HERE)
 from divcoll_post import analysis as A  # noqa: E402
 from test_figures import call, pdf_ok, png_ok  # noqa: E402
 from divcoll_post import single_run as claims  # noqa: E402
-import fig3  # noqa: E402
-import report  # noqa: E402
-import summary  # noqa: E402
-import table_s1  # noqa: E402
+from divcoll_post.figures import fig3  # noqa: E402
+from divcoll_post import report  # noqa: E402
+from divcoll_post import summary  # noqa: E402
+from divcoll_post.figures import table_s1  # noqa: E402
 
 ENVS = ["flat", "ice", "wind"]
 NOVEL = ["ice", "wind"]

@@ -19,7 +19,7 @@ POST = os.path.dirname(HERE)
 sys.path.insert(0, POST)
 
 from divcoll_post import runfile  # noqa: E402
-import fig_s1  # noqa: E402
+from divcoll_post.figures import fig_s1  # noqa: E402
 
 FIG = os.path.join(POST, "fig_s1.py")
 ROWS, COLS = 4, 7

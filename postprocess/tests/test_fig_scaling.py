@@ -16,13 +16,14 @@ import h5py
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import fig_scaling as F  # noqa: E402
+from divcoll_post.figures import fig_scaling as F  # noqa: E402
 
 
 def write_run(path, stages, cpu=None):
     """stages: {name: (wall s, busy per rank, serial text or None)}; cpu: {name: (compute CPU s per rank, serving
     CPU s per rank)}"""
     with h5py.File(path, "w") as f:
+        f.attrs["format"] = "divcoll-run"
         for name, (wall, busy, serial) in stages.items():
             g = f.create_group(name)
             g.attrs["wall_s_last_session"] = wall

@@ -20,10 +20,10 @@ POST = os.path.dirname(HERE)
 sys.path.insert(0, POST)
 
 from divcoll_post import results as R  # noqa: E402
-import fig2  # noqa: E402
-import fig4  # noqa: E402
-import fig_s2  # noqa: E402
-import fig_s3  # noqa: E402
+from divcoll_post.figures import fig2  # noqa: E402
+from divcoll_post.figures import fig4  # noqa: E402
+from divcoll_post.figures import fig_s2  # noqa: E402
+from divcoll_post.figures import fig_s3  # noqa: E402
 
 ENVS = ["flat", "ice", "gap"]
 TYPES = [f"{k}@{d}" for k in ("weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse")

@@ -12,7 +12,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import animate  # noqa: E402
+from divcoll_post import animate  # noqa: E402
 
 BIN = os.environ.get("DIVCOLL_BINARY", os.path.join(HERE, "..", "..", "build", "divcoll"))
 

@@ -11,7 +11,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 from divcoll_post import verdicts as V  # noqa: E402
-import robustness  # noqa: E402
+from divcoll_post import robustness  # noqa: E402
 
 
 class RobustnessTest(unittest.TestCase):

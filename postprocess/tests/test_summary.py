@@ -13,7 +13,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 from divcoll_post import single_run as claims  # noqa: E402
-import summary  # noqa: E402
+from divcoll_post import summary  # noqa: E402
+from divcoll_post import results  # noqa: E402
 
 
 # the paper's counts: claims are judged only where a run has the counts their tests need
@@ -102,7 +103,7 @@ class SummaryTest(unittest.TestCase):
         self.assertEqual(v, "not measured")
 
     def test_ok_mean_of_nothing_is_nan_not_zero(self):
-        m, bad = summary.ok_mean([1.0, 2.0], [1, 2])
+        m, bad = results.ok_mean([1.0, 2.0], [1, 2])
         self.assertTrue(np.isnan(m))
         self.assertEqual(bad, 2)
 

@@ -1,6 +1,10 @@
 """The protocol's estimator (divcoll_post/verdicts.py) on synthetic populations with known effects, and the verdict
 page recomputed from kept arrays (postprocess/gallery/studies/verdicts)."""
+import contextlib
+import html
+import io
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -10,7 +14,8 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-from divcoll_post import verdict_page, verdicts as V  # noqa: E402
+from divcoll_post import robustness, verdict_page, verdicts as V  # noqa: E402
+from divcoll_post.reader import list_attr  # noqa: E402
 
 ENVS = ["flat", "decline", "gap", "ice", "incline", "low_gravity", "obstacle", "sand", "step_down", "step_up",
         "sticky", "treadmill", "wind"]
@@ -52,8 +57,9 @@ def synthetic(seed, rng, R=3, alone_flat=15.0, beat=-5.0, wdd_bonus=2.0, worse_d
             "analysis": {"novel_environments": ENVS[1:], "dtw": dtw, "familiarity": fam}}
 
 
-def kept_study(d, arrays):
-    """a study folder as `divcoll report --keep` leaves it, in d: arrays = {variant: {seed: a run's arrays}}"""
+def kept_study(d, arrays, manifest=""):
+    """a study folder as `divcoll report --keep` leaves it, in d: arrays = {variant: {seed: a run's arrays}};
+    manifest: more top-level keys of its study.toml"""
     import json
     runs = []
     for v, by_seed in arrays.items():
@@ -61,10 +67,34 @@ def kept_study(d, arrays):
         for seed, a in by_seed.items():
             with open(os.path.join(d, v, f"seed{seed}.arrays.json"), "w") as fh:
                 json.dump(a, fh)
-            runs.append(f'[[run]]\nvariant = "{v}"\nseed = {seed}\npath = "{v}/seed{seed}.h5"\nstatus = "complete"\n')
+            runs.append(f'[[run]]\nvariant = "{v}"\nseed = {seed}\npath = "{v}/seed{seed}.h5"\nstatus = "complete"\n'
+                        'reuses = ""\nfrom = ""\n')
     with open(os.path.join(d, "study.toml"), "w") as fh:
-        fh.write('format = "divcoll-study"\nname = "synthetic"\n'
-                 + "".join(f'[[variant]]\nname = "{v}"\n' for v in arrays) + "\n".join(runs))
+        fh.write('format = "divcoll-study"\nname = "synthetic"\n' + manifest
+                 + "".join(f'[[variant]]\nname = "{v}"\nset = []\n' for v in arrays) + "\n".join(runs))
+
+
+def md_table(text, head):
+    """the rows of the Markdown table whose header starts with `head`, each a list of cells as plain text"""
+    lines = text.splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith(head))
+    rows = []
+    for ln in lines[i + 2:]:
+        if not ln.startswith("|"):
+            break
+        rows.append([re.sub(r"\*\*|`", "", c.strip()) for c in ln.strip().strip("|").split("|")])
+    return rows
+
+
+def html_table(page, first_headers):
+    """the body rows of the HTML table whose header cells start with `first_headers`, each a list of cell texts"""
+    for table in re.findall(r"<table>(.*?)</table>", page, re.S):
+        heads = [html.unescape(re.sub(r"<[^>]+>", "", h)) for h in re.findall(r"<th>(.*?)</th>", table, re.S)]
+        if heads[:len(first_headers)] == list(first_headers):
+            body = table.split("<tbody>", 1)[1]
+            return [[html.unescape(re.sub(r"<[^>]+>", "", c)) for c in re.findall(r"<td[^>]*>(.*?)</td>", tr, re.S)]
+                    for tr in re.findall(r"<tr>(.*?)</tr>", body, re.S)]
+    raise AssertionError(f"no table with headers {first_headers}")
 
 
 def populations(n, **kw):
@@ -147,6 +177,37 @@ class Page(unittest.TestCase):
         finally:
             shutil.rmtree(d)
 
+    def test_the_study_report_writes_the_verdict_page_in_markdown_and_html_with_one_table(self):
+        # `divcoll report STUDY` runs robustness.py: beside the robustness page, the verdict page as verdicts.md and a
+        # self-contained verdicts.html carrying the same verdict table and the forest plot
+        d = tempfile.mkdtemp()
+        try:
+            rng = np.random.Generator(np.random.PCG64(3))
+            # with what robustness.py reads of a study's manifest besides the runs
+            kept_study(d, {"baseline": {s: synthetic(s, rng) for s in (1, 2, 3, 4)}},
+                       manifest='base = "base.toml"\nseeds = [1, 2, 3, 4]\nscale = []\n')
+            out = os.path.join(d, "page")
+            with contextlib.redirect_stdout(io.StringIO()) as said:
+                self.assertEqual(robustness.main([d, "--out", out, "--resamples", "500"]), 0)
+            md_path, html_path = (os.path.join(out, "verdicts", f"verdicts.{x}") for x in ("md", "html"))
+            self.assertIn(f"wrote the verdict page {md_path}", said.getvalue())
+            with open(md_path) as fh:
+                md = fh.read()
+            with open(html_path) as fh:
+                page = fh.read()
+            with open(os.path.join(out, "robustness.md")) as fh:
+                self.assertIn("(verdicts/verdicts.html)", fh.read())
+            head = ("id", "claim", "paper")
+            rows = md_table(md, "| id | claim | paper |")
+            self.assertEqual(len(rows), len(V.CLAIMS))
+            self.assertEqual(html_table(page, head), rows)
+            self.assertIn(".v-supported", page)
+            self.assertIn('class="v-supported"', page)  # C09's cell ends in its verdict
+            self.assertEqual(page.count('src="data:image/png;base64,'), md.count("![")), "every figure embedded"
+            self.assertNotIn('src="forest.png"', page)
+        finally:
+            shutil.rmtree(d)
+
     def test_the_readings_page_pairs_each_reading_with_its_baseline(self):
         d = tempfile.mkdtemp()
         try:
@@ -211,7 +272,7 @@ class Extract(unittest.TestCase):
         import h5py
         with h5py.File(self.path, "r") as f:
             rm = f["analysis/adversity/replicate_means"][()]
-            types = V._list_attr(f["analysis"], "types")
+            types = list_attr(f["analysis"], "types")
         for ti, t in enumerate(types):
             np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["worse"], rm[ti, 0], rtol=1e-12)
             np.testing.assert_allclose(self.a["analysis"]["dtw"][t]["better"], rm[ti, 1], rtol=1e-12)

@@ -91,7 +91,7 @@ echo "== the robustness page"
 import os, sys
 sys.path.insert(0, sys.argv[1])
 import h5py, numpy as np
-import robustness
+from divcoll_post import robustness
 from divcoll_post import verdicts as V
 table = open(sys.argv[2]).read().split("## Claims × variants")[1].split("## Effects")[0]
 header = [l for l in table.splitlines() if l.startswith("| claim |")][0]
@@ -132,6 +132,10 @@ print(f"{len(rows)} claims x {len(cols)} columns, {measured} cells measured; rea
 EOF
 for v in baseline long_deploy baseline__training_length; do [ -s "$W/page/figures/fig2a_$v.png" ] || fail "no Fig. 2A for $v"; done
 [ -s "$W/page/robustness.png" ] || fail "no summary figure"
+# and the study's verdict page (the protocol over populations) beside it, in Markdown and HTML with the same table
+for x in md html; do [ -s "$W/page/verdicts/verdicts.$x" ] || fail "divcoll report DIR wrote no verdicts.$x"; done
+grep -q "(verdicts/verdicts.html)" "$W/page/robustness.md" || fail "the robustness page does not link the verdict page"
+for c in C01 C28; do grep -q "<td>$c</td>" "$W/page/verdicts/verdicts.html" || fail "verdicts.html lacks the row of $c"; done
 
 echo "== the folder kept as manifest and run summaries gives the same page, and counts as complete"
 for v in baseline long_deploy; do

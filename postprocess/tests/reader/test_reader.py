@@ -24,7 +24,7 @@ SOURCE = os.path.join(POST, "..")
 sys.path.insert(0, POST)
 
 import divcoll_post  # noqa: E402
-import fig2  # noqa: E402
+from divcoll_post.figures import fig2  # noqa: E402
 from divcoll_post import results as R  # noqa: E402
 
 BIN = os.environ.get("DIVCOLL_BINARY", os.path.join(SOURCE, "build", "divcoll"))
