@@ -100,7 +100,7 @@ std::vector<Entry> base_entries() {
                     bool graded = false) {
     return Entry{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
   };
-  // written only with connectors.keep_best / optimizer = cmaes ... (mpi/connector_opt_stage.cpp)
+  // written only with connectors.keep_best / optimizer = cmaes ... (src/stages/connectors.cpp)
   const auto O = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc) {
     Entry e{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", false};
     e.optional = true;
