@@ -1,5 +1,5 @@
 // one verdict on every rank: a check that fails on one rank must stop every rank at the same point,
-// never leave the others waiting in a collective call the failing rank skipped (issue 12).
+// never leave the others waiting in a collective call the failing rank skipped.
 #pragma once
 
 #include <mpi.h>

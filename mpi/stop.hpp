@@ -1,4 +1,4 @@
-// clean stops (issue 12). SIGTERM, SIGINT and SIGUSR1 ask the run to stop right after its next checkpoint:
+// clean stops. SIGTERM, SIGINT and SIGUSR1 ask the run to stop right after its next checkpoint:
 // every rank learns of it at the next commit of a stage's state (an allreduce), which then copies the run
 // file to its checkpoint whatever output.checkpoint_interval_s says; the run file is closed, the lock dropped, and
 // the run exits with kStoppedExit; `--resume` continues it. If no checkpoint comes within

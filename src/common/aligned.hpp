@@ -5,7 +5,7 @@
 // lines. malloc only promises 16 bytes, and which of the four offsets a buffer gets depended on everything
 // allocated before it, even on the size of the environment: the same agent training took 16.8 or 18.2 ms
 // per agent from one process to the next (SPEC-identical results; measured in the agents stage of the quick
-// preset, issue 10). Buffers that the kernels sweep use this allocator so that the speed is the fast one every
+// preset). Buffers that the kernels sweep use this allocator so that the speed is the fast one every
 // time, whatever came before.
 #pragma once
 

@@ -1,4 +1,4 @@
-// one writer per run file (issue 12): `RUN.h5.lock` beside the run file, held for the whole run by the
+// one writer per run file: `RUN.h5.lock` beside the run file, held for the whole run by the
 // job that writes RUN.h5 and its checkpoint RUN.h5.ckpt.
 //
 // The lock is a POSIX record lock (fcntl) on the lock file, so the kernel (or the shared file system's

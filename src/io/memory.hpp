@@ -1,4 +1,4 @@
-// memory known before it is spent (issue 12): what a simulator needs for an episode, measured from two
+// memory known before it is spent: what a simulator needs for an episode, measured from two
 // tiny probe episodes and extrapolated, checked against a limit before anything large is allocated.
 #pragma once
 
