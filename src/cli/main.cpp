@@ -7,9 +7,9 @@
 #include "cli/commands.hpp"
 #include "common/check.hpp"
 #include "config/config.hpp"
-#include "mpi/bench_farm.hpp"
-#include "mpi/run_cmd.hpp"
-#include "mpi/study_cmd.hpp"
+#include "cli/bench_farm.hpp"
+#include "cli/run.hpp"
+#include "cli/study.hpp"
 
 int main(int argc, char** argv) {
   using namespace divcoll;
@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   b->add_option("--config", bench.config, "run config whose weak connector stiffness to use (default: the paper's)")
       ->check(CLI::ExistingFile);
 
-  mpi::BenchFarmArgs bf;
+  cli::BenchFarmArgs bf;
   auto* bfc = app.add_subcommand("bench-farm", "the task farm's master alone: cost per item at any rank count (MPI)");
   bfc->add_option("--item-ms", bf.item_ms, "cost of one synthetic item, ms (a sleep)")->check(CLI::Range(0.0, 60000.0));
   bfc->add_option("--result-bytes", bf.result_bytes, "bytes of one result")->check(CLI::Range(0, 1 << 28));
@@ -149,9 +149,9 @@ int main(int argc, char** argv) {
   co->add_option("--eval-steps", cop.eval_steps, "evaluation episode lengths, comma-separated");
   co->add_flag("--force", cop.force, "overwrite existing CSV files");
 
-  mpi::RunArgs evo;
+  cli::RunArgs evo;
   auto* v = app.add_subcommand("evolve", "the agents stage: evolution and gradient descent (MPI)");
-  mpi::RunArgs run;
+  cli::RunArgs run;
   auto* r = app.add_subcommand("run", "the whole pipeline, stage by stage (MPI)");
   for (auto [cmd, a] : {std::pair{v, &evo}, std::pair{r, &run}}) {
     cmd->add_option("config", a->config, "config file (TOML), e.g. configs/quick.toml")->required()->check(CLI::ExistingFile);
@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
   r->add_option("--base", run.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
   evo.agents_only = true;
 
-  mpi::StudyArgs study;
+  cli::StudyArgs study;
   auto* st = app.add_subcommand("study", "one run file per (variant, seed) of a study file, reusing shared stages (MPI)");
   st->add_option("study", study.study, "study file (TOML), e.g. configs/studies/tiny.toml; with --status the study folder")
       ->required()->check(CLI::ExistingPath);
@@ -221,10 +221,10 @@ int main(int argc, char** argv) {
     if (*cmpc) return cli::compare(cmp_a, cmp_b);
     if (*gd) return cli::grad_diag(gdg);
     if (*co) return cli::connector_opt(cop);
-    if (*v) return mpi::run_main(argc, argv, evo);
-    if (*r) return mpi::run_main(argc, argv, run);
-    if (*bfc) return mpi::bench_farm_main(argc, argv, bf);
-    if (*st) return mpi::study_main(argc, argv, study);
+    if (*v) return cli::run_main(argc, argv, evo);
+    if (*r) return cli::run_main(argc, argv, run);
+    if (*bfc) return cli::bench_farm_main(argc, argv, bf);
+    if (*st) return cli::study_main(argc, argv, study);
   } catch (const InputError& err) {
     std::fprintf(stderr, "divcoll: error: %s\n", err.what());
     return 2;

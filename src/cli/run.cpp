@@ -1,4 +1,4 @@
-#include "mpi/run_cmd.hpp"
+#include "cli/run.hpp"
 
 #include <fcntl.h>
 #include <mpi.h>
@@ -35,7 +35,7 @@
 #include "mpi/stop.hpp"
 #include "mpi/wait.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 namespace {
 
 std::string now_iso() {
@@ -115,7 +115,7 @@ void derive_run_file(const std::string& base, const std::string& path, const std
     f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
     f.close();
   }
-  fs::remove(checkpoint_path(path));
+  fs::remove(mpi::checkpoint_path(path));
   fs::rename(tmp, path);
 }
 
@@ -127,7 +127,7 @@ void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std
     io::h5::File f = io::h5::File::open(file);
     for (const std::string& s : io::stage_names()) {
       if (s == before) break;
-      if (complete(f, s)) present.insert(s);
+      if (mpi::complete(f, s)) present.insert(s);
     }
   };
   if (!existing.empty()) note_complete(existing, "");
@@ -180,7 +180,7 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
   int per_node = 1;
   MPI_Comm_size(node, &per_node);
   MPI_Comm_free(&node);
-  agree_rank0(comm, [&] {
+  mpi::agree_rank0(comm, [&] {
     Rng rng = make_rng(cfg.run.seed, 0, 0);
     collective::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
     sim::RunOptions opt;
@@ -252,7 +252,7 @@ int run_session(const RunArgs& args) {
   bool existing = false;
   io::WriterLock lock;
   try {
-    agree_all(MPI_COMM_WORLD, [&] {
+    mpi::agree_all(MPI_COMM_WORLD, [&] {
       cfg = io::load_config(args.config, args.overrides);
       path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
       DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
@@ -264,7 +264,7 @@ int run_session(const RunArgs& args) {
         DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
                              "--from writes a new run file: give an --out other than --base " << args.base);
         std::string why;
-        DIVCOLL_THROW_UNLESS(valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
+        DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
         io::h5::File f = io::h5::File::open(args.base);
         const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
         const std::string diff = incompatible_keys(before, cfg, args.from);
@@ -273,7 +273,7 @@ int run_session(const RunArgs& args) {
                                  << ", so their keys must be the same:" << diff);
         for (const std::string& s : sections_before(args.from))
           if (io::stage_enabled(cfg, s))
-            DIVCOLL_THROW_UNLESS(complete(f, s),
+            DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
                                  "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
       }
       if (fs::exists(path) && !args.resume && !args.force)
@@ -283,30 +283,30 @@ int run_session(const RunArgs& args) {
     sim::set_default_float_networks(cfg.run.precision == "float_networks");
     io::use_run_physics(cfg);  // and under its contact law
     const fs::path parent = fs::absolute(path).parent_path();
-    agree_rank0(MPI_COMM_WORLD, [&] {
+    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
       std::error_code mkdir_error;
       fs::create_directories(parent, mkdir_error);
     });
-    agree_all(MPI_COMM_WORLD, [&] {
+    mpi::agree_all(MPI_COMM_WORLD, [&] {
       DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
       DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
     });
     // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
     // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
-    arm_stop_signals(rank, cfg.run.stop_grace_s);
-    barrier_sleeping(MPI_COMM_WORLD);
+    mpi::arm_stop_signals(rank, cfg.run.stop_grace_s);
+    mpi::barrier_sleeping(MPI_COMM_WORLD);
     // one writer per run file: taken before anything is written (the lock also covers the checkpoint)
     std::string note;
-    agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
-    agree_all(MPI_COMM_WORLD, [&] {
+    mpi::agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
+    mpi::agree_all(MPI_COMM_WORLD, [&] {
       if (rank != 0) lock = io::WriterLock::join(path, rank);
     });
     if (rank == 0 && !note.empty()) std::printf("divcoll: %s\n", note.c_str());
     // a run resumes only with the config it started with (checked read-only, before anything is opened
     // for writing; rank 0 reads, every rank gets the verdict)
-    existing = args.resume && prepare_resume(MPI_COMM_WORLD, path);
+    existing = args.resume && mpi::prepare_resume(MPI_COMM_WORLD, path);
     if (existing) {
-      agree_rank0(MPI_COMM_WORLD, [&] {
+      mpi::agree_rank0(MPI_COMM_WORLD, [&] {
         std::string diff;
         io::h5::File f = io::h5::File::open(path);
         if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
@@ -327,12 +327,12 @@ int run_session(const RunArgs& args) {
     // memory: the tapes of the episodes with gradients, before any is allocated
     check_memory(MPI_COMM_WORLD, cfg, args);
     // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
-    agree_rank0(MPI_COMM_WORLD, [&] {
+    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
       check_stage_inputs(cfg, args, existing ? path : std::string());
     });
     if (!args.from.empty()) {
       // a copy of the base's earlier stages is made now and continued like a resumed run
-      agree_rank0(MPI_COMM_WORLD, [&] {
+      mpi::agree_rank0(MPI_COMM_WORLD, [&] {
         try {
           derive_run_file(args.base, path, args.from, io::to_toml(cfg));
         } catch (const std::exception& e) {
@@ -372,18 +372,18 @@ int run_session(const RunArgs& args) {
         fresh.write_string("hostname", host);
         fresh.close();
       }
-      barrier_sleeping(MPI_COMM_WORLD);
+      mpi::barrier_sleeping(MPI_COMM_WORLD);
       if (rank == 0) {
-        fs::remove(checkpoint_path(path));
+        fs::remove(mpi::checkpoint_path(path));
         fs::rename(tmp, path);
       }
-      barrier_sleeping(MPI_COMM_WORLD);
+      mpi::barrier_sleeping(MPI_COMM_WORLD);
     }
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
     if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
     // the stages call ckpt at each commit; it copies the run file to its checkpoint when
     // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
-    Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
+    mpi::Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
     auto ckpt = [&] { checkpoints.commit(); };
     file.write_int("ranks", size);
     if (rank == 0)
@@ -399,22 +399,22 @@ int run_session(const RunArgs& args) {
       // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
       // takes effect here
       if (!existing) checkpoints.force();
-      for (const Stage& stage : kStages) {
+      for (const mpi::Stage& stage : mpi::kStages) {
         const std::string name(stage.info.name);
         if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
-        if (complete(file, name)) {
+        if (mpi::complete(file, name)) {
           if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
           continue;
         }
         const auto t1 = std::chrono::steady_clock::now();
-        const FarmClock before = farm_clock();
-        const DriverClock dbefore = driver_clock();
+        const mpi::FarmClock before = mpi::farm_clock();
+        const mpi::DriverClock dbefore = mpi::driver_clock();
         // a finished stage is never redone on --resume: its end is a forced checkpoint
-        run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
+        mpi::run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
         // how busy each rank was (seconds computing items), and the CPU seconds of its computing and serving
         // threads, gathered on every rank
-        const FarmClock& fc = farm_clock();
+        const mpi::FarmClock& fc = mpi::farm_clock();
         double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
                           fc.serve_cpu_s - before.serve_cpu_s};
         std::vector<double> all(3 * static_cast<size_t>(size));
@@ -443,7 +443,7 @@ int run_session(const RunArgs& args) {
         g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
         g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
         // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
-        const DriverClock& dc = driver_clock();
+        const mpi::DriverClock& dc = mpi::driver_clock();
         double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
                             dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
         MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
@@ -465,24 +465,24 @@ int run_session(const RunArgs& args) {
                         name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
         }
       }
-    } catch (const StopRequested& stop) {
+    } catch (const mpi::StopRequested& stop) {
       // every rank is here, right after the same checkpoint: the file is closed normally
-      disarm_stop_signals();
+      mpi::disarm_stop_signals();
       file.close();
-      barrier_sleeping(MPI_COMM_WORLD);
+      mpi::barrier_sleeping(MPI_COMM_WORLD);
       lock.release();
       if (rank == 0)
         std::printf("divcoll: stopped by %s right after a checkpoint; %s holds every finished step: continue with "
                     "--resume (exit %d)\n",
-                    signal_name(stop.signal), path.c_str(), kStoppedExit);
+                    mpi::signal_name(stop.signal), path.c_str(), mpi::kStoppedExit);
       std::fflush(stdout);
-      return kStoppedExit;
+      return mpi::kStoppedExit;
     }
-    disarm_stop_signals();
+    mpi::disarm_stop_signals();
     file.write_string("end_time", now_iso());
     file.close();
-    remove_checkpoint(MPI_COMM_WORLD, path);
-    barrier_sleeping(MPI_COMM_WORLD);
+    mpi::remove_checkpoint(MPI_COMM_WORLD, path);
+    mpi::barrier_sleeping(MPI_COMM_WORLD);
     lock.release();
     if (rank == 0) std::printf("done: %s\n", path.c_str());
   } catch (const InputError& e) {
@@ -496,4 +496,4 @@ int run_session(const RunArgs& args) {
   return 0;
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli
