@@ -232,6 +232,236 @@ void check_run_output(const std::string& path, const RunArgs& args) {
   }
 }
 
+
+// the command line, the config, the output and --from's base (every rank checks; prepare agrees the verdict)
+void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
+  namespace fs = std::filesystem;
+  cfg = io::load_config(args.config, args.overrides);
+  path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
+  DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
+  DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
+  DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
+                       "--from starts a new run file; to continue one that was interrupted, use --resume alone");
+  check_run_output(path, args);
+  if (!args.from.empty()) {
+    DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
+                         "--from writes a new run file: give an --out other than --base " << args.base);
+    std::string why;
+    DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
+    io::h5::File f = io::h5::File::open(args.base);
+    const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
+    const std::string diff = incompatible_keys(before, cfg, args.from);
+    if (!diff.empty())
+      throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
+                             << ", so their keys must be the same:" << diff);
+    for (const std::string& s : sections_before(args.from))
+      if (io::stage_enabled(cfg, s))
+        DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
+                             "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
+  }
+  if (fs::exists(path) && !args.resume && !args.force)
+    throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
+}
+
+// the run file's folder: rank 0 makes it, then every rank must find it and be able to write there
+void make_output_folder(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path parent = fs::absolute(path).parent_path();
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+    std::error_code mkdir_error;
+    fs::create_directories(parent, mkdir_error);
+  });
+  mpi::agree_all(MPI_COMM_WORLD, [&] {
+    DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
+    DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+  });
+}
+
+// one writer per run file: rank 0 takes the lock, the other ranks join it
+io::WriterLock lock_run_file(const std::string& path, int rank, int size) {
+  io::WriterLock lock;
+  std::string note;
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
+  mpi::agree_all(MPI_COMM_WORLD, [&] {
+    if (rank != 0) lock = io::WriterLock::join(path, rank);
+  });
+  if (rank == 0 && !note.empty()) std::printf("divcoll: %s\n", note.c_str());
+  return lock;
+}
+
+// rank 0: a run resumes only with the config it started with, but for the keys that choose what runs now or how it
+// reports (checked read-only, before anything is opened for writing)
+void check_resume_config(const std::string& path, const io::RunConfig& cfg) {
+  std::string diff;
+  io::h5::File f = io::h5::File::open(path);
+  if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
+    diff = " (not a divcoll run file)";
+  } else {
+    const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
+    const auto a = io::flat(before), b = io::flat(cfg);
+    // keys that choose what runs now or how it reports, not what it computes, may change
+    const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
+                                        "output.checkpoint_every", "output.checkpoint_interval_s"};
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].second != b[i].second && !free.count(a[i].first))
+        diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+  }
+  if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+}
+
+// what the checks leave for the work: the config, the run file's path, whether the file is continued, its lock
+struct Prepared {
+  io::RunConfig cfg;
+  std::string path;
+  bool existing = false;
+  io::WriterLock lock;
+};
+
+// everything that can be refused is refused here, identically on every rank, before any work: each check's verdict
+// is agreed by all ranks (mpi/agree.hpp), so a refusal (InputError) on one rank is every rank's. On the way it arms
+// the stop signals, takes the run file's lock and, with --from, makes the run file from the base's earlier stages
+void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
+  mpi::agree_all(MPI_COMM_WORLD, [&] { check_request(args, p.cfg, p.path); });
+  // every episode of this run in the run's precision (a study runs several configs in one process)
+  sim::set_default_float_networks(p.cfg.run.precision == "float_networks");
+  io::use_run_physics(p.cfg);  // and under its contact law
+  make_output_folder(p.path);
+  // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
+  // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
+  mpi::arm_stop_signals(rank, p.cfg.run.stop_grace_s);
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+  // taken before anything is written (the lock also covers the checkpoint)
+  p.lock = lock_run_file(p.path, rank, size);
+  p.existing = args.resume && mpi::prepare_resume(MPI_COMM_WORLD, p.path);
+  if (p.existing) mpi::agree_rank0(MPI_COMM_WORLD, [&] { check_resume_config(p.path, p.cfg); });
+  // memory: the tapes of the episodes with gradients, before any is allocated
+  check_memory(MPI_COMM_WORLD, p.cfg, args);
+  // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+    check_stage_inputs(p.cfg, args, p.existing ? p.path : std::string());
+  });
+  if (!args.from.empty()) {
+    // a copy of the base's earlier stages is made now and continued like a resumed run
+    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+      try {
+        derive_run_file(args.base, p.path, args.from, io::to_toml(p.cfg));
+      } catch (const std::exception& e) {
+        throw InputError(msg() << "cannot make " << p.path << " from " << args.base << ": " << e.what());
+      }
+    });
+    if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", p.path.c_str(), args.base.c_str(), args.from.c_str());
+    p.existing = true;
+  }
+}
+
+// a new run file is made under a temporary name and renamed into place when its provenance is written, so a file
+// at `path` is always a complete run file (and gets a checkpoint at once)
+void create_run_file(const std::string& path, const io::RunConfig& cfg, const std::string& toml, hid_t fapl, int rank) {
+  namespace fs = std::filesystem;
+  const std::string tmp = path + ".new";
+  {
+    io::h5::File fresh = io::h5::File::create(tmp, true, fapl);
+    fresh.write_string("format", "divcoll-run");
+    fresh.write_int("version", 1);
+    fresh.write_string("divcoll_version", DIVCOLL_VERSION);
+    fresh.write_string("git_commit", git_commit());
+    fresh.write_int("seed", static_cast<int64_t>(cfg.run.seed));
+    fresh.write_string("config", toml);
+    fresh.write_string("start_time", now_iso());
+    char host[256] = {0};
+    gethostname(host, sizeof host - 1);
+    fresh.write_string("hostname", host);
+    fresh.close();
+  }
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+  if (rank == 0) {
+    fs::remove(mpi::checkpoint_path(path));
+    fs::rename(tmp, path);
+  }
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+}
+
+// a finished stage's timings, as attributes of its group (every rank writes) and, on rank 0, as text: its wall time,
+// how busy each rank was (seconds computing items) and the CPU seconds of its computing and serving threads,
+// gathered on every rank, and rank 0's time outside the farm
+void record_stage_times(io::h5::File& file, const std::string& name, double wall, const mpi::FarmClock& before,
+                        const mpi::DriverClock& dbefore, int rank, int size) {
+  const mpi::FarmClock& fc = mpi::farm_clock();
+  double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
+                    fc.serve_cpu_s - before.serve_cpu_s};
+  std::vector<double> all(3 * static_cast<size_t>(size));
+  MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, MPI_COMM_WORLD);
+  auto per_rank = [&](int k) {  // "r0,r1,..." of column k
+    std::string text;
+    for (int r = 0; r < size; ++r) {
+      char tmp[32];
+      std::snprintf(tmp, sizeof tmp, "%s%.3f", r == 0 ? "" : ",", all[3 * static_cast<size_t>(r) + k]);
+      text += tmp;
+    }
+    return text;
+  };
+  double busy_sum = 0, busy_max = 0, cpu_sum = 0, serve_sum = 0;
+  for (int r = 0; r < size; ++r) {
+    const double* c = &all[3 * static_cast<size_t>(r)];
+    busy_sum += c[0], busy_max = std::max(busy_max, c[0]), cpu_sum += c[1], serve_sum += c[2];
+  }
+  io::h5::Node g = file.group(name);
+  g.write_double("wall_s_last_session", wall);
+  g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
+  // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
+  g.write_string("busy_s_per_rank_last_session", per_rank(0));
+  // CPU seconds of each rank's computing thread inside compute() (below busy: it was descheduled) and of
+  // its serving thread inside the farm (0 at one rank)
+  g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
+  g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
+  // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
+  const mpi::DriverClock& dc = mpi::driver_clock();
+  double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
+                      dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
+  MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
+  char serial_text[160];
+  std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
+                serial[1], serial[2], serial[3]);
+  g.write_string("master_serial_s_last_session", serial_text);
+  if (rank == 0) {  // run_with_status has marked the stage complete
+    std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
+                name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * all[0] / wall,
+                busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
+    std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
+                "commits %.2f s)\n",
+                name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
+                serial[0], serial[1], serial[2], serial[3]);
+    if (size > 1 && busy_sum > 0 && wall > 0)
+      std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
+                  "core each\n",
+                  name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
+  }
+}
+
+// every stage of the run (`evolve`: the agents stage) that is not complete in the file, in run order, each with
+// its timings; a stop asked for by a signal leaves by mpi::StopRequested right after a checkpoint
+void run_stages(const RunArgs& args, const io::RunConfig& cfg, io::h5::File& file, mpi::Checkpointer& checkpoints,
+                int rank, int size) {
+  // the stages call ckpt at each commit; it copies the run file to its checkpoint when
+  // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
+  auto ckpt = [&] { checkpoints.commit(); };
+  for (const mpi::Stage& stage : mpi::kStages) {
+    const std::string name(stage.info.name);
+    if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
+    if (mpi::complete(file, name)) {
+      if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
+      continue;
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    const mpi::FarmClock before = mpi::farm_clock();
+    const mpi::DriverClock dbefore = mpi::driver_clock();
+    // a finished stage is never redone on --resume: its end is a forced checkpoint
+    mpi::run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    record_stage_times(file, name, wall, before, dbefore, rank, size);
+  }
+}
+
 }  // namespace
 
 int run_main(int argc, char** argv, const RunArgs& args) {
@@ -243,109 +473,16 @@ int run_session(const RunArgs& args) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  namespace fs = std::filesystem;
 
-  // everything that can be refused is refused here, identically on every rank, before any work: each
-  // check's verdict is agreed by all ranks (mpi/agree.hpp), so a refusal on one rank is every rank's
-  io::RunConfig cfg;
-  std::string path;
-  bool existing = false;
-  io::WriterLock lock;
+  Prepared p;
   try {
-    mpi::agree_all(MPI_COMM_WORLD, [&] {
-      cfg = io::load_config(args.config, args.overrides);
-      path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
-      DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
-      DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
-      DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
-                           "--from starts a new run file; to continue one that was interrupted, use --resume alone");
-      check_run_output(path, args);
-      if (!args.from.empty()) {
-        DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
-                             "--from writes a new run file: give an --out other than --base " << args.base);
-        std::string why;
-        DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
-        io::h5::File f = io::h5::File::open(args.base);
-        const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
-        const std::string diff = incompatible_keys(before, cfg, args.from);
-        if (!diff.empty())
-          throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
-                                 << ", so their keys must be the same:" << diff);
-        for (const std::string& s : sections_before(args.from))
-          if (io::stage_enabled(cfg, s))
-            DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
-                                 "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
-      }
-      if (fs::exists(path) && !args.resume && !args.force)
-        throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
-    });
-    // every episode of this run in the run's precision (a study runs several configs in one process)
-    sim::set_default_float_networks(cfg.run.precision == "float_networks");
-    io::use_run_physics(cfg);  // and under its contact law
-    const fs::path parent = fs::absolute(path).parent_path();
-    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
-      std::error_code mkdir_error;
-      fs::create_directories(parent, mkdir_error);
-    });
-    mpi::agree_all(MPI_COMM_WORLD, [&] {
-      DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
-      DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
-    });
-    // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
-    // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
-    mpi::arm_stop_signals(rank, cfg.run.stop_grace_s);
-    mpi::barrier_sleeping(MPI_COMM_WORLD);
-    // one writer per run file: taken before anything is written (the lock also covers the checkpoint)
-    std::string note;
-    mpi::agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
-    mpi::agree_all(MPI_COMM_WORLD, [&] {
-      if (rank != 0) lock = io::WriterLock::join(path, rank);
-    });
-    if (rank == 0 && !note.empty()) std::printf("divcoll: %s\n", note.c_str());
-    // a run resumes only with the config it started with (checked read-only, before anything is opened
-    // for writing; rank 0 reads, every rank gets the verdict)
-    existing = args.resume && mpi::prepare_resume(MPI_COMM_WORLD, path);
-    if (existing) {
-      mpi::agree_rank0(MPI_COMM_WORLD, [&] {
-        std::string diff;
-        io::h5::File f = io::h5::File::open(path);
-        if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
-          diff = " (not a divcoll run file)";
-        } else {
-          const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
-          const auto a = io::flat(before), b = io::flat(cfg);
-          // keys that choose what runs now or how it reports, not what it computes, may change
-          const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
-                                              "output.checkpoint_every", "output.checkpoint_interval_s"};
-          for (size_t i = 0; i < a.size(); ++i)
-            if (a[i].second != b[i].second && !free.count(a[i].first))
-              diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
-        }
-        if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
-      });
-    }
-    // memory: the tapes of the episodes with gradients, before any is allocated
-    check_memory(MPI_COMM_WORLD, cfg, args);
-    // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
-    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
-      check_stage_inputs(cfg, args, existing ? path : std::string());
-    });
-    if (!args.from.empty()) {
-      // a copy of the base's earlier stages is made now and continued like a resumed run
-      mpi::agree_rank0(MPI_COMM_WORLD, [&] {
-        try {
-          derive_run_file(args.base, path, args.from, io::to_toml(cfg));
-        } catch (const std::exception& e) {
-          throw InputError(msg() << "cannot make " << path << " from " << args.base << ": " << e.what());
-        }
-      });
-      if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", path.c_str(), args.base.c_str(), args.from.c_str());
-      existing = true;
-    }
+    prepare(args, rank, size, p);
   } catch (const InputError& e) {
     if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
     return 2;
   }
+  const io::RunConfig& cfg = p.cfg;
+  const std::string& path = p.path;
 
   try {
     const std::string toml = io::to_toml(cfg);
@@ -354,123 +491,31 @@ int run_session(const RunArgs& args) {
     // the file's metadata is written collectively at a flush (one MPI-IO write) instead of by rank 0 in small
     // independent writes: the quick agents stage's per-round writes went from 0.17 to 0.11 s at 2 ranks
     H5Pset_coll_metadata_write(fapl.id(), true);
-    if (!existing) {
-      // a new run file is made under a temporary name and renamed into place when its provenance is
-      // written, so a file at `path` is always a complete run file (and gets a checkpoint at once)
-      const std::string tmp = path + ".new";
-      {
-        io::h5::File fresh = io::h5::File::create(tmp, true, fapl.id());
-        fresh.write_string("format", "divcoll-run");
-        fresh.write_int("version", 1);
-        fresh.write_string("divcoll_version", DIVCOLL_VERSION);
-        fresh.write_string("git_commit", git_commit());
-        fresh.write_int("seed", static_cast<int64_t>(cfg.run.seed));
-        fresh.write_string("config", toml);
-        fresh.write_string("start_time", now_iso());
-        char host[256] = {0};
-        gethostname(host, sizeof host - 1);
-        fresh.write_string("hostname", host);
-        fresh.close();
-      }
-      mpi::barrier_sleeping(MPI_COMM_WORLD);
-      if (rank == 0) {
-        fs::remove(mpi::checkpoint_path(path));
-        fs::rename(tmp, path);
-      }
-      mpi::barrier_sleeping(MPI_COMM_WORLD);
-    }
+    if (!p.existing) create_run_file(path, cfg, toml, fapl.id(), rank);
     io::h5::File file = io::h5::File::open(path, true, fapl.id());
-    if (existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
-    // the stages call ckpt at each commit; it copies the run file to its checkpoint when
-    // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
+    if (p.existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
     mpi::Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
-    auto ckpt = [&] { checkpoints.commit(); };
     file.write_int("ranks", size);
     if (rank == 0)
       std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
                   args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
                   path.c_str());
-    const int64_t resumed = existing ? file.read_int("resumed") : 0;  // every rank reads (io/h5.hpp Journal)
-    if (rank == 0 && existing)
+    const int64_t resumed = p.existing ? file.read_int("resumed") : 0;  // every rank reads (io/h5.hpp Journal)
+    if (rank == 0 && p.existing)
       std::printf("resuming %s from its last checkpoint (resumed %lld time(s))\n", path.c_str(),
                   static_cast<long long>(resumed));
 
     try {
       // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
       // takes effect here
-      if (!existing) checkpoints.force();
-      for (const mpi::Stage& stage : mpi::kStages) {
-        const std::string name(stage.info.name);
-        if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
-        if (mpi::complete(file, name)) {
-          if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
-          continue;
-        }
-        const auto t1 = std::chrono::steady_clock::now();
-        const mpi::FarmClock before = mpi::farm_clock();
-        const mpi::DriverClock dbefore = mpi::driver_clock();
-        // a finished stage is never redone on --resume: its end is a forced checkpoint
-        mpi::run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
-        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-        // how busy each rank was (seconds computing items), and the CPU seconds of its computing and serving
-        // threads, gathered on every rank
-        const mpi::FarmClock& fc = mpi::farm_clock();
-        double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
-                          fc.serve_cpu_s - before.serve_cpu_s};
-        std::vector<double> all(3 * static_cast<size_t>(size));
-        MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, MPI_COMM_WORLD);
-        auto per_rank = [&](int k) {  // "r0,r1,..." of column k
-          std::string text;
-          for (int r = 0; r < size; ++r) {
-            char tmp[32];
-            std::snprintf(tmp, sizeof tmp, "%s%.3f", r == 0 ? "" : ",", all[3 * static_cast<size_t>(r) + k]);
-            text += tmp;
-          }
-          return text;
-        };
-        double busy_sum = 0, busy_max = 0, cpu_sum = 0, serve_sum = 0;
-        for (int r = 0; r < size; ++r) {
-          const double* c = &all[3 * static_cast<size_t>(r)];
-          busy_sum += c[0], busy_max = std::max(busy_max, c[0]), cpu_sum += c[1], serve_sum += c[2];
-        }
-        io::h5::Node g = file.group(name);
-        g.write_double("wall_s_last_session", wall);
-        g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
-        // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
-        g.write_string("busy_s_per_rank_last_session", per_rank(0));
-        // CPU seconds of each rank's computing thread inside compute() (below busy: it was descheduled) and of
-        // its serving thread inside the farm (0 at one rank)
-        g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
-        g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
-        // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
-        const mpi::DriverClock& dc = mpi::driver_clock();
-        double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
-                            dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
-        MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
-        char serial_text[160];
-        std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
-                      serial[1], serial[2], serial[3]);
-        g.write_string("master_serial_s_last_session", serial_text);
-        if (rank == 0) {  // run_with_status has marked the stage complete
-          std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
-                      name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * all[0] / wall,
-                      busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
-          std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
-                      "commits %.2f s)\n",
-                      name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
-                      serial[0], serial[1], serial[2], serial[3]);
-          if (size > 1 && busy_sum > 0 && wall > 0)
-            std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
-                        "core each\n",
-                        name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
-        }
-      }
+      if (!p.existing) checkpoints.force();
+      run_stages(args, cfg, file, checkpoints, rank, size);
     } catch (const mpi::StopRequested& stop) {
       // every rank is here, right after the same checkpoint: the file is closed normally
       mpi::disarm_stop_signals();
       file.close();
       mpi::barrier_sleeping(MPI_COMM_WORLD);
-      lock.release();
+      p.lock.release();
       if (rank == 0)
         std::printf("divcoll: stopped by %s right after a checkpoint; %s holds every finished step: continue with "
                     "--resume (exit %d)\n",
@@ -483,7 +528,7 @@ int run_session(const RunArgs& args) {
     file.close();
     mpi::remove_checkpoint(MPI_COMM_WORLD, path);
     mpi::barrier_sleeping(MPI_COMM_WORLD);
-    lock.release();
+    p.lock.release();
     if (rank == 0) std::printf("done: %s\n", path.c_str());
   } catch (const InputError& e) {
     // a failure after work started may be on one rank only: stop every rank, keep what was written
