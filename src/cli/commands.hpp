@@ -1,4 +1,4 @@
-// the subcommands of `divcoll` (mpi/main.cpp registers them with CLI11)
+// the subcommands of `divcoll` (src/cli/main.cpp registers them with CLI11)
 #pragma once
 
 #include <cstdint>

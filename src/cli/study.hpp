@@ -52,7 +52,7 @@
 #include <string>
 #include <vector>
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 
 struct StudyArgs {
   std::string study;  // study file (TOML); with --status the study folder
@@ -77,4 +77,4 @@ inline constexpr int kBaseNotComplete = 3;
 // signal after a checkpoint, kBaseNotComplete); --status, --adopt and --submit run without MPI
 int study_main(int argc, char** argv, const StudyArgs& args);
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli

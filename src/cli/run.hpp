@@ -8,7 +8,7 @@
 
 #include "config/config.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 
 struct RunArgs {
   std::string config;                  // TOML file
@@ -32,4 +32,4 @@ std::vector<std::string> sections_before(const std::string& stage);
 // as " key (old -> new)" items; empty when `from` can reuse `base`'s earlier stages
 std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from);
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli

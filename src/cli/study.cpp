@@ -1,4 +1,4 @@
-#include "mpi/study_cmd.hpp"
+#include "cli/study.hpp"
 
 #include <mpi.h>
 #include <toml++/toml.h>
@@ -26,10 +26,10 @@
 #include "io/file_lock.hpp"
 #include "io/h5.hpp"
 #include "mpi/agree.hpp"
-#include "mpi/run_cmd.hpp"
+#include "cli/run.hpp"
 #include "mpi/wait.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -877,8 +877,8 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
                            "--run K computes one run of a study folder that exists: pass --resume too");
       p = prepare(args, args.resume, rank == 0);
       if (!args.run.empty()) only = find_run(p.runs, args.run);
-      barrier_sleeping(MPI_COMM_WORLD);
-      agree_rank0(MPI_COMM_WORLD, [&] {  // a failure on rank 0 stops every rank here
+      mpi::barrier_sleeping(MPI_COMM_WORLD);
+      mpi::agree_rank0(MPI_COMM_WORLD, [&] {  // a failure on rank 0 stops every rank here
         create_folder(dir, p.s);
         save_manifest(dir, p.s, p.runs, p.st);
       });
@@ -1004,4 +1004,4 @@ int study_main(int argc, char** argv, const StudyArgs& args) {
   return code;
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli

@@ -12,7 +12,7 @@
 
 #include <string>
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 
 struct BenchFarmArgs {
   double item_ms = 5.0;         // cost of one item (a sleep)
@@ -30,4 +30,4 @@ struct BenchFarmArgs {
 // initialises MPI, runs, finalises; returns the exit code
 int bench_farm_main(int argc, char** argv, const BenchFarmArgs& args);
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli

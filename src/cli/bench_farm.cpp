@@ -1,4 +1,4 @@
-#include "mpi/bench_farm.hpp"
+#include "cli/bench_farm.hpp"
 
 #include <mpi.h>
 
@@ -12,7 +12,7 @@
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
 
-namespace divcoll::mpi {
+namespace divcoll::cli {
 namespace {
 
 double since(std::chrono::steady_clock::time_point t0) {
@@ -21,7 +21,7 @@ double since(std::chrono::steady_clock::time_point t0) {
 
 struct RoundStats {
   double wall = 0, fold = 0, busy = 0;  // busy: compute seconds summed over ranks
-  FarmClock master;                     // rank 0's clock over the round
+  mpi::FarmClock master;                     // rank 0's clock over the round
 };
 
 }  // namespace
@@ -40,17 +40,17 @@ int bench_farm_main(int argc, char** argv, const BenchFarmArgs& a) {
   auto compute = [&](const std::string& task) {
     const auto t0 = std::chrono::steady_clock::now();
     const double v = static_cast<double>(task.size() % 7);
-    std::string r = pack(std::vector<double>(doubles, v));
+    std::string r = mpi::pack(std::vector<double>(doubles, v));
     const double left = a.item_ms * 1e-3 - since(t0);
     if (left > 0) std::this_thread::sleep_for(std::chrono::duration<double>(left));
     return r;
   };
   std::vector<double> sum(doubles, 0.0);
   auto fold_one = [&](const std::string& r) {
-    const std::vector<double> g = unpack<std::vector<double>>(r);
+    const std::vector<double> g = mpi::unpack<std::vector<double>>(r);
     for (int q = 0; q < doubles; ++q) sum[q] += g[q];
   };
-  FarmOptions opt;
+  mpi::FarmOptions opt;
   opt.block = a.block;
   opt.max_block = a.max_block;
   opt.depth = a.depth;
@@ -67,10 +67,10 @@ int bench_farm_main(int argc, char** argv, const BenchFarmArgs& a) {
   std::vector<RoundStats> rounds;
   for (int round = 0; round <= a.rounds; ++round) {  // round 0 warms up
     MPI_Barrier(MPI_COMM_WORLD);
-    const FarmClock before = farm_clock();
+    const mpi::FarmClock before = mpi::farm_clock();
     fold_during = 0;
     const auto t0 = std::chrono::steady_clock::now();
-    const FarmResult fr = farm(MPI_COMM_WORLD, items, compute, opt);
+    const mpi::FarmResult fr = mpi::farm(MPI_COMM_WORLD, items, compute, opt);
     double fold_after = 0;
     if (rank == 0 && a.fold == "after") {
       const auto t1 = std::chrono::steady_clock::now();
@@ -80,9 +80,9 @@ int bench_farm_main(int argc, char** argv, const BenchFarmArgs& a) {
     RoundStats s;
     s.wall = since(t0);
     s.fold = fold_during + fold_after;
-    const double busy = farm_clock().compute_s - before.compute_s;
+    const double busy = mpi::farm_clock().compute_s - before.compute_s;
     MPI_Reduce(&busy, &s.busy, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
-    const FarmClock& c = farm_clock();
+    const mpi::FarmClock& c = mpi::farm_clock();
     s.master = {c.compute_s - before.compute_s, c.farm_s - before.farm_s, c.items - before.items,
                 c.serve_cpu_s - before.serve_cpu_s, c.task_s - before.task_s, c.result_s - before.result_s,
                 c.task_msgs - before.task_msgs, c.result_msgs - before.result_msgs, c.results - before.results,
@@ -129,4 +129,4 @@ int bench_farm_main(int argc, char** argv, const BenchFarmArgs& a) {
   return 0;
 }
 
-}  // namespace divcoll::mpi
+}  // namespace divcoll::cli

@@ -1,0 +1,544 @@
+#include "cli/run.hpp"
+
+#include <fcntl.h>
+#include <mpi.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <algorithm>
+#include <set>
+
+#include "collective/builders.hpp"
+#include "collective/pairs.hpp"
+#include "common/check.hpp"
+#include "io/memory.hpp"
+#include "common/rng.hpp"
+#include "morph/body.hpp"
+#include "common/version.hpp"
+#include "config/config.hpp"
+#include "io/h5.hpp"
+#include "cli/commands.hpp"
+#include "io/file_lock.hpp"
+#include "config/pipeline.hpp"
+#include "io/run_read.hpp"
+#include "mpi/agree.hpp"
+#include "mpi/checkpoint.hpp"
+#include "mpi/driver.hpp"
+#include "mpi/scheduler.hpp"
+#include "mpi/stop.hpp"
+#include "mpi/wait.hpp"
+
+namespace divcoll::cli {
+namespace {
+
+std::string now_iso() {
+  const std::time_t t = std::time(nullptr);
+  char b[64];
+  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return b;
+}
+
+// MPI for the lifetime of a command (work happens in an inner scope, so files close before Finalize)
+struct MpiSession {
+  // FUNNELED: the task farm computes items in a thread of its own; only the calling thread uses MPI
+  MpiSession(int argc, char** argv) {
+    int provided = 0;
+    MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  }
+  ~MpiSession() { MPI_Finalize(); }
+};
+
+}  // namespace
+
+// the sections whose keys decide what a stage computes (beside run.seed, run.precision and run.contact, which every
+// stage uses)
+std::vector<std::string> sections_before(const std::string& stage) {
+  std::vector<std::string> out;
+  for (const std::string& s : io::stage_names()) {
+    if (s == stage) break;
+    out.push_back(s);
+  }
+  return out;
+}
+
+// --from: the keys of the stages before `from` (and run.seed, run.precision, run.contact; analysis.familiarity_on,
+// which the deploy stage reads, when deploy is before `from`) must be the base's; returns the
+// differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
+std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
+  const auto a = io::flat(base), b = io::flat(now);
+  const auto secs = sections_before(from);
+  std::string diff;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
+    // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
+    const bool deploy_reads = a[i].first == "analysis.familiarity_on" &&
+                              std::find(secs.begin(), secs.end(), "deploy") != secs.end();
+    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || a[i].first == "run.contact" ||
+                       deploy_reads ||
+                       std::find(secs.begin(), secs.end(), sec) != secs.end();
+    if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+  }
+  return diff;
+}
+
+namespace {
+
+// rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
+void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
+                     const std::string& toml) {
+  namespace fs = std::filesystem;
+  const std::string tmp = path + ".new";
+  fs::copy_file(base, tmp, fs::copy_options::overwrite_existing);
+  {
+    io::h5::File f = io::h5::File::open(tmp, true);
+    bool later = false;
+    for (const std::string& s : io::stage_names()) {
+      later = later || s == from;
+      if (later && f.has(s)) DIVCOLL_THROW_UNLESS(H5Ldelete(f.id(), s.c_str(), H5P_DEFAULT) >= 0, "cannot drop " << s);
+    }
+    // the earlier stages' provenance is kept under base_*; the new stages' is this binary's
+    if (f.has_attribute("git_commit")) f.write_string("base_git_commit", f.read_string("git_commit"));
+    if (f.has_attribute("start_time")) f.write_string("base_start_time", f.read_string("start_time"));
+    for (const char* a : {"end_time", "resumed", "config", "git_commit", "start_time", "divcoll_version"})
+      if (f.has_attribute(a)) H5Adelete(f.id(), a);
+    f.write_string("config", toml);
+    f.write_string("git_commit", git_commit());
+    f.write_string("divcoll_version", DIVCOLL_VERSION);
+    f.write_string("start_time", now_iso());
+    f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
+    f.close();
+  }
+  fs::remove(mpi::checkpoint_path(path));
+  fs::rename(tmp, path);
+}
+
+// rank 0: refuses a stage that would run without its inputs. `existing`: the run file being continued
+// ("" for a new one); with --from, the base's stages before --from count as present.
+void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std::string& existing) {
+  std::set<std::string> present;
+  auto note_complete = [&](const std::string& file, const std::string& before) {
+    io::h5::File f = io::h5::File::open(file);
+    for (const std::string& s : io::stage_names()) {
+      if (s == before) break;
+      if (mpi::complete(f, s)) present.insert(s);
+    }
+  };
+  if (!existing.empty()) note_complete(existing, "");
+  if (!args.from.empty()) note_complete(args.base, args.from);
+  // stored values that the stages to run read, where no NaN or Inf may be (a finished stage's weights
+  // and bodies; a running stage's checkpointed optimizer state)
+  const std::string source = !existing.empty() ? existing : args.base;
+  if (!source.empty()) {
+    io::h5::File f = io::h5::File::open(source);
+    std::vector<std::string> finite;
+    if (present.count("agents"))
+      for (const char* d : {"params", "rest_pos", "rest_length", "amplitude"}) finite.push_back(std::string("agents/final/") + d);
+    if (present.count("connectors"))
+      for (const std::string& kind : cfg.connectors.kinds) finite.push_back("connectors/" + kind + "/params");
+    if (!existing.empty() && io::stage_enabled(cfg, "connectors") && !present.count("connectors"))
+      for (const char* d : {"params", "adam_m", "adam_v"}) finite.push_back(std::string("connectors/state/") + d);
+    for (const std::string& d : finite) {
+      if (!f.has(d)) continue;
+      const std::vector<double> v = f.read<double>(d);
+      size_t bad = 0, first = 0;
+      for (size_t i = v.size(); i-- > 0;)
+        if (!std::isfinite(v[i])) ++bad, first = i;
+      if (bad > 0)
+        throw InputError(msg() << source << ": " << d << " holds " << bad << " non-finite value(s) (the first at flat index "
+                               << first << ") where none may be; the stored stage is damaged: rerun it into a new "
+                               << "file (--from, or a new run) instead of continuing this one");
+    }
+  }
+  const std::string where = !existing.empty() ? existing : !args.from.empty() ? args.base : std::string();
+  for (const io::StageInfo& s : io::kStageTable) {
+    const std::string stage(s.name);
+    const bool runs = args.agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);
+    if (!runs || present.count(stage)) continue;
+    for (const std::string& need : io::split(std::string(s.reads))) {
+      if (present.count(need) || (!args.agents_only && io::stage_enabled(cfg, need))) continue;
+      throw InputError(msg() << "stage " << stage << " reads the results of stage " << need << ", but " << need
+                             << " is neither in run.stages nor complete in "
+                             << (where.empty() ? "a new run file" : where)
+                             << ": add it to run.stages, or continue a run file that has it (--resume, or --from "
+                             << stage << " --base OLD.h5)");
+    }
+  }
+}
+
+// the tape of the longest episode with gradients of the stages that run: every rank's simulator holds
+// one, so the ranks on a node share run.memory_limit_gb (default 80% of rank 0's MemAvailable)
+void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  int per_node = 1;
+  MPI_Comm_size(node, &per_node);
+  MPI_Comm_free(&node);
+  mpi::agree_rank0(comm, [&] {
+    Rng rng = make_rng(cfg.run.seed, 0, 0);
+    collective::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
+    sim::RunOptions opt;
+    opt.grad = true;
+    uint64_t need = 0;
+    std::string what;
+    auto consider = [&](const sim::Scene& s, int steps, const std::string& key) {
+      opt.steps = steps;
+      const uint64_t n = episode_bytes(s, opt);
+      if (n > need) need = n, what = key + " = " + std::to_string(steps) + ", " + std::to_string(sim::substeps_needed(s)) + " substep(s) per step";
+    };
+    const bool run = !args.agents_only;
+    if (args.agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
+      consider(collective::agent_scene(a, "flat"), cfg.agents.episode_steps, "agents.episode_steps");
+    if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
+      a.anchors = collective::compute_anchors(a);
+      b.anchors = collective::compute_anchors(b);
+      const std::vector<double> w = morph::init_connector_params(rng);
+      double k = cfg.connectors.weak_stiffness;
+      for (const std::string& kind : cfg.connectors.kinds)
+        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
+      std::vector<std::string> envs = {"flat"};
+      if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
+      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env), cfg.connectors.episode_steps, "connectors.episode_steps");
+    }
+    const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
+    if (need > limit)
+      throw InputError(msg() << "each rank's episodes with gradients need about " << gb_text(need) << " of memory ("
+                             << what << "), more than its share of the limit: " << gb_text(limit) << " = "
+                             << (cfg.run.memory_limit_gb > 0 ? "run.memory_limit_gb" : "80% of MemAvailable")
+                             << " / " << per_node << " rank(s) on this node. Shorten the episodes, run fewer ranks "
+                             << "per node, or raise run.memory_limit_gb");
+  });
+}
+
+// refuses outputs that are not (or would not be) regular files, and an output that is one of the inputs
+void check_run_output(const std::string& path, const RunArgs& args) {
+  if (!cli::check_existing_output(path, "run file")) return;
+  std::error_code ec;
+  DIVCOLL_THROW_UNLESS(!std::filesystem::equivalent(path, args.config, ec), "--out " << path << " is the config file");
+  if (args.resume || args.force) {
+    const int fd = ::open(path.c_str(), O_RDWR);
+    if (fd < 0) {
+      const int err = errno;
+      throw InputError(msg() << path << ": cannot open it for writing: " << std::strerror(err)
+                             << (err == EPERM ? " (is it immutable? see lsattr)" : ""));
+    }
+    ::close(fd);
+  }
+}
+
+
+// the command line, the config, the output and --from's base (every rank checks; prepare agrees the verdict)
+void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
+  namespace fs = std::filesystem;
+  cfg = io::load_config(args.config, args.overrides);
+  path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
+  DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
+  DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
+  DIVCOLL_THROW_UNLESS(args.from.empty() || !args.resume,
+                       "--from starts a new run file; to continue one that was interrupted, use --resume alone");
+  check_run_output(path, args);
+  if (!args.from.empty()) {
+    DIVCOLL_THROW_UNLESS(fs::absolute(args.base) != fs::absolute(path),
+                         "--from writes a new run file: give an --out other than --base " << args.base);
+    std::string why;
+    DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
+    io::h5::File f = io::h5::File::open(args.base);
+    const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
+    const std::string diff = incompatible_keys(before, cfg, args.from);
+    if (!diff.empty())
+      throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
+                             << ", so their keys must be the same:" << diff);
+    for (const std::string& s : sections_before(args.from))
+      if (io::stage_enabled(cfg, s))
+        DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
+                             "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
+  }
+  if (fs::exists(path) && !args.resume && !args.force)
+    throw InputError(msg() << path << " exists; pass --resume to continue it or --force to start over");
+}
+
+// the run file's folder: rank 0 makes it, then every rank must find it and be able to write there
+void make_output_folder(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path parent = fs::absolute(path).parent_path();
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+    std::error_code mkdir_error;
+    fs::create_directories(parent, mkdir_error);
+  });
+  mpi::agree_all(MPI_COMM_WORLD, [&] {
+    DIVCOLL_THROW_UNLESS(fs::is_directory(parent), "cannot create the output folder " << parent.string());
+    DIVCOLL_THROW_UNLESS(access(parent.c_str(), W_OK) == 0, "the output folder " << parent.string() << " is not writable");
+  });
+}
+
+// one writer per run file: rank 0 takes the lock, the other ranks join it
+io::WriterLock lock_run_file(const std::string& path, int rank, int size) {
+  io::WriterLock lock;
+  std::string note;
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] { lock = io::WriterLock::acquire(path, size, &note); });
+  mpi::agree_all(MPI_COMM_WORLD, [&] {
+    if (rank != 0) lock = io::WriterLock::join(path, rank);
+  });
+  if (rank == 0 && !note.empty()) std::printf("divcoll: %s\n", note.c_str());
+  return lock;
+}
+
+// rank 0: a run resumes only with the config it started with, but for the keys that choose what runs now or how it
+// reports (checked read-only, before anything is opened for writing)
+void check_resume_config(const std::string& path, const io::RunConfig& cfg) {
+  std::string diff;
+  io::h5::File f = io::h5::File::open(path);
+  if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
+    diff = " (not a divcoll run file)";
+  } else {
+    const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
+    const auto a = io::flat(before), b = io::flat(cfg);
+    // keys that choose what runs now or how it reports, not what it computes, may change
+    const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
+                                        "output.checkpoint_every", "output.checkpoint_interval_s"};
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].second != b[i].second && !free.count(a[i].first))
+        diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+  }
+  if (!diff.empty()) throw InputError(msg() << "cannot resume " << path << " with a different config:" << diff);
+}
+
+// what the checks leave for the work: the config, the run file's path, whether the file is continued, its lock
+struct Prepared {
+  io::RunConfig cfg;
+  std::string path;
+  bool existing = false;
+  io::WriterLock lock;
+};
+
+// everything that can be refused is refused here, identically on every rank, before any work: each check's verdict
+// is agreed by all ranks (mpi/agree.hpp), so a refusal (InputError) on one rank is every rank's. On the way it arms
+// the stop signals, takes the run file's lock and, with --from, makes the run file from the base's earlier stages
+void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
+  mpi::agree_all(MPI_COMM_WORLD, [&] { check_request(args, p.cfg, p.path); });
+  // every episode of this run in the run's precision (a study runs several configs in one process)
+  sim::set_default_float_networks(p.cfg.run.precision == "float_networks");
+  io::use_run_physics(p.cfg);  // and under its contact law
+  make_output_folder(p.path);
+  // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
+  // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1
+  mpi::arm_stop_signals(rank, p.cfg.run.stop_grace_s);
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+  // taken before anything is written (the lock also covers the checkpoint)
+  p.lock = lock_run_file(p.path, rank, size);
+  p.existing = args.resume && mpi::prepare_resume(MPI_COMM_WORLD, p.path);
+  if (p.existing) mpi::agree_rank0(MPI_COMM_WORLD, [&] { check_resume_config(p.path, p.cfg); });
+  // memory: the tapes of the episodes with gradients, before any is allocated
+  check_memory(MPI_COMM_WORLD, p.cfg, args);
+  // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
+  mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+    check_stage_inputs(p.cfg, args, p.existing ? p.path : std::string());
+  });
+  if (!args.from.empty()) {
+    // a copy of the base's earlier stages is made now and continued like a resumed run
+    mpi::agree_rank0(MPI_COMM_WORLD, [&] {
+      try {
+        derive_run_file(args.base, p.path, args.from, io::to_toml(p.cfg));
+      } catch (const std::exception& e) {
+        throw InputError(msg() << "cannot make " << p.path << " from " << args.base << ": " << e.what());
+      }
+    });
+    if (rank == 0) std::printf("divcoll: %s holds the stages of %s before %s\n", p.path.c_str(), args.base.c_str(), args.from.c_str());
+    p.existing = true;
+  }
+}
+
+// a new run file is made under a temporary name and renamed into place when its provenance is written, so a file
+// at `path` is always a complete run file (and gets a checkpoint at once)
+void create_run_file(const std::string& path, const io::RunConfig& cfg, const std::string& toml, hid_t fapl, int rank) {
+  namespace fs = std::filesystem;
+  const std::string tmp = path + ".new";
+  {
+    io::h5::File fresh = io::h5::File::create(tmp, true, fapl);
+    fresh.write_string("format", "divcoll-run");
+    fresh.write_int("version", 1);
+    fresh.write_string("divcoll_version", DIVCOLL_VERSION);
+    fresh.write_string("git_commit", git_commit());
+    fresh.write_int("seed", static_cast<int64_t>(cfg.run.seed));
+    fresh.write_string("config", toml);
+    fresh.write_string("start_time", now_iso());
+    char host[256] = {0};
+    gethostname(host, sizeof host - 1);
+    fresh.write_string("hostname", host);
+    fresh.close();
+  }
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+  if (rank == 0) {
+    fs::remove(mpi::checkpoint_path(path));
+    fs::rename(tmp, path);
+  }
+  mpi::barrier_sleeping(MPI_COMM_WORLD);
+}
+
+// a finished stage's timings, as attributes of its group (every rank writes) and, on rank 0, as text: its wall time,
+// how busy each rank was (seconds computing items) and the CPU seconds of its computing and serving threads,
+// gathered on every rank, and rank 0's time outside the farm
+void record_stage_times(io::h5::File& file, const std::string& name, double wall, const mpi::FarmClock& before,
+                        const mpi::DriverClock& dbefore, int rank, int size) {
+  const mpi::FarmClock& fc = mpi::farm_clock();
+  double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
+                    fc.serve_cpu_s - before.serve_cpu_s};
+  std::vector<double> all(3 * static_cast<size_t>(size));
+  MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, MPI_COMM_WORLD);
+  auto per_rank = [&](int k) {  // "r0,r1,..." of column k
+    std::string text;
+    for (int r = 0; r < size; ++r) {
+      char tmp[32];
+      std::snprintf(tmp, sizeof tmp, "%s%.3f", r == 0 ? "" : ",", all[3 * static_cast<size_t>(r) + k]);
+      text += tmp;
+    }
+    return text;
+  };
+  double busy_sum = 0, busy_max = 0, cpu_sum = 0, serve_sum = 0;
+  for (int r = 0; r < size; ++r) {
+    const double* c = &all[3 * static_cast<size_t>(r)];
+    busy_sum += c[0], busy_max = std::max(busy_max, c[0]), cpu_sum += c[1], serve_sum += c[2];
+  }
+  io::h5::Node g = file.group(name);
+  g.write_double("wall_s_last_session", wall);
+  g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
+  // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
+  g.write_string("busy_s_per_rank_last_session", per_rank(0));
+  // CPU seconds of each rank's computing thread inside compute() (below busy: it was descheduled) and of
+  // its serving thread inside the farm (0 at one rank)
+  g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
+  g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
+  // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
+  const mpi::DriverClock& dc = mpi::driver_clock();
+  double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
+                      dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
+  MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
+  char serial_text[160];
+  std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
+                serial[1], serial[2], serial[3]);
+  g.write_string("master_serial_s_last_session", serial_text);
+  if (rank == 0) {  // run_with_status has marked the stage complete
+    std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
+                name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * all[0] / wall,
+                busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
+    std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
+                "commits %.2f s)\n",
+                name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
+                serial[0], serial[1], serial[2], serial[3]);
+    if (size > 1 && busy_sum > 0 && wall > 0)
+      std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
+                  "core each\n",
+                  name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
+  }
+}
+
+// every stage of the run (`evolve`: the agents stage) that is not complete in the file, in run order, each with
+// its timings; a stop asked for by a signal leaves by mpi::StopRequested right after a checkpoint
+void run_stages(const RunArgs& args, const io::RunConfig& cfg, io::h5::File& file, mpi::Checkpointer& checkpoints,
+                int rank, int size) {
+  // the stages call ckpt at each commit; it copies the run file to its checkpoint when
+  // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
+  auto ckpt = [&] { checkpoints.commit(); };
+  for (const mpi::Stage& stage : mpi::kStages) {
+    const std::string name(stage.info.name);
+    if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
+    if (mpi::complete(file, name)) {
+      if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
+      continue;
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    const mpi::FarmClock before = mpi::farm_clock();
+    const mpi::DriverClock dbefore = mpi::driver_clock();
+    // a finished stage is never redone on --resume: its end is a forced checkpoint
+    mpi::run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    record_stage_times(file, name, wall, before, dbefore, rank, size);
+  }
+}
+
+}  // namespace
+
+int run_main(int argc, char** argv, const RunArgs& args) {
+  MpiSession session(argc, argv);
+  return run_session(args);
+}
+
+int run_session(const RunArgs& args) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+
+  Prepared p;
+  try {
+    prepare(args, rank, size, p);
+  } catch (const InputError& e) {
+    if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
+    return 2;
+  }
+  const io::RunConfig& cfg = p.cfg;
+  const std::string& path = p.path;
+
+  try {
+    const std::string toml = io::to_toml(cfg);
+    io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
+    // the file's metadata is written collectively at a flush (one MPI-IO write) instead of by rank 0 in small
+    // independent writes: the quick agents stage's per-round writes went from 0.17 to 0.11 s at 2 ranks
+    H5Pset_coll_metadata_write(fapl.id(), true);
+    if (!p.existing) create_run_file(path, cfg, toml, fapl.id(), rank);
+    io::h5::File file = io::h5::File::open(path, true, fapl.id());
+    if (p.existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
+    mpi::Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
+    file.write_int("ranks", size);
+    if (rank == 0)
+      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n", DIVCOLL_VERSION, git_commit(),
+                  args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
+                  path.c_str());
+    const int64_t resumed = p.existing ? file.read_int("resumed") : 0;  // every rank reads (io/h5.hpp Journal)
+    if (rank == 0 && p.existing)
+      std::printf("resuming %s from its last checkpoint (resumed %lld time(s))\n", path.c_str(),
+                  static_cast<long long>(resumed));
+
+    try {
+      // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
+      // takes effect here
+      if (!p.existing) checkpoints.force();
+      run_stages(args, cfg, file, checkpoints, rank, size);
+    } catch (const mpi::StopRequested& stop) {
+      // every rank is here, right after the same checkpoint: the file is closed normally
+      mpi::disarm_stop_signals();
+      file.close();
+      mpi::barrier_sleeping(MPI_COMM_WORLD);
+      p.lock.release();
+      if (rank == 0)
+        std::printf("divcoll: stopped by %s right after a checkpoint; %s holds every finished step: continue with "
+                    "--resume (exit %d)\n",
+                    mpi::signal_name(stop.signal), path.c_str(), mpi::kStoppedExit);
+      std::fflush(stdout);
+      return mpi::kStoppedExit;
+    }
+    mpi::disarm_stop_signals();
+    file.write_string("end_time", now_iso());
+    file.close();
+    mpi::remove_checkpoint(MPI_COMM_WORLD, path);
+    mpi::barrier_sleeping(MPI_COMM_WORLD);
+    p.lock.release();
+    if (rank == 0) std::printf("done: %s\n", path.c_str());
+  } catch (const InputError& e) {
+    // a failure after work started may be on one rank only: stop every rank, keep what was written
+    std::fprintf(stderr, "divcoll: error (rank %d): %s\n", rank, e.what());
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "divcoll: failed (rank %d): %s\n", rank, e.what());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  return 0;
+}
+
+}  // namespace divcoll::cli
