@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "morph/body.hpp"

@@ -9,7 +9,7 @@
 // once the items are out, with kRoundEnd (once per worker; messages from the master arrive in the order it
 // sent them, so no task of this round follows it; the next round's may, as the master can be ahead by rounds:
 // a worker matches nothing after its kRoundEnd). The round ends when every item has a result on the master. Payloads
-// are binary archives of plain data (collective::Agent, evo::TrainResult, ...) defined below.
+// are binary archives of plain data (morph::Agent, evo::TrainResult, ...) defined below.
 #pragma once
 
 #include <boost/archive/binary_iarchive.hpp>
@@ -24,10 +24,10 @@
 #include <streambuf>
 #include <string>
 
-#include "collective/builders.hpp"
 #include "evo/evolution.hpp"
 #include "evo/gd.hpp"
 #include "io/run_read.hpp"
+#include "morph/agent.hpp"
 #include "mpi/scheduler.hpp"
 #include "mpi/wait.hpp"
 
@@ -134,12 +134,12 @@ using io::split;
 namespace boost::serialization {
 
 template <class Ar>
-void serialize(Ar& ar, divcoll::collective::Anchors& a, unsigned) {
+void serialize(Ar& ar, divcoll::morph::Anchors& a, unsigned) {
   ar & a.back_foot & a.front_foot & a.back_upper & a.front_upper;
 }
 
 template <class Ar>
-void serialize(Ar& ar, divcoll::collective::Agent& a, unsigned) {
+void serialize(Ar& ar, divcoll::morph::Agent& a, unsigned) {
   ar & a.cells & a.springs & a.rest_pos & a.spring_i & a.spring_j & a.rest_length & a.amplitude & a.params & a.anchors;
 }
 

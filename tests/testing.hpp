@@ -47,9 +47,9 @@ inline std::string doc(const std::string& path) {
 }
 inline std::string readme() { return doc("README.md"); }
 // a random agent from stream (seed, `stream`) with anchors from a short (300-step) run on flat
-inline collective::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
+inline morph::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
   Rng rng = make_rng(seed, stream, 0);
-  collective::Agent a = collective::random_agent(rng);
+  morph::Agent a = collective::random_agent(rng);
   a.anchors = collective::compute_anchors(a, {}, 300);
   return a;
 }
@@ -57,7 +57,7 @@ inline collective::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
 // the engine's gradient tests' pair (tests/sim/gradient_test.cpp, float_networks_test.cpp): two random agents with
 // anchors and connector weights with nonzero biases (so that every term matters), from stream (11, 1)
 struct GradientPair {
-  collective::Agent p, a;
+  morph::Agent p, a;
   std::vector<double> conn;
 };
 inline const GradientPair& gradient_pair() {

@@ -32,7 +32,7 @@ double thread_cpu_seconds() {
 }
 
 struct Fixture {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   std::vector<double> conn;
   collective::Tether tether;  // of the weak connector, from the config
 };
@@ -54,7 +54,7 @@ sim::Scene make_scene(const Fixture& f, const std::string& kind, int b, const si
   if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", c);
   if (kind == "pair")
     return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.tether, "flat", c);
-  std::vector<const collective::Agent*> chain;
+  std::vector<const morph::Agent*> chain;
   for (int q = 0; q < 20; ++q) chain.push_back(&f.agents[(b + q) % n]);
   return collective::chain_scene(chain, f.conn, f.tether, "flat", c);
 }

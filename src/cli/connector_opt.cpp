@@ -39,7 +39,7 @@ int connector_opt(const ConnectorOptArgs& a) {
   }
   const RunAgents ra = load_run_agents(a.run, a.overrides);
   const io::RunConfig& cfg = ra.cfg;
-  const std::vector<collective::Agent>& agents = ra.agents;
+  const std::vector<morph::Agent>& agents = ra.agents;
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
   const collective::OptSettings os = collective::opt_settings(C);

@@ -49,7 +49,7 @@ int export_scene(const ExportArgs& a) {
                        a.run << " is not a divcoll run file");
   const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
   io::use_run_physics(cfg);  // the episode's scene under the run's contact law (written into the scene file)
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
   // pairs and chains need the anchors the connectors stage stored (the ones every stage used)
   auto with_anchors = [&] {
@@ -125,7 +125,7 @@ int export_scene(const ExportArgs& a) {
       members.assign(all.begin() + row * a.size, all.begin() + (row + 1) * a.size);
     }
     with_anchors();
-    std::vector<const collective::Agent*> ptr;
+    std::vector<const morph::Agent*> ptr;
     for (int32_t m : members) ptr.push_back(&agents[m]);
     s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
                                 collective::tether(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);

@@ -72,7 +72,7 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
 int grad_diag(const GradDiagArgs& a) {
   const RunAgents ra = load_run_agents(a.run, a.overrides);
   const io::RunConfig& cfg = ra.cfg;
-  const std::vector<collective::Agent>& agents = ra.agents;
+  const std::vector<morph::Agent>& agents = ra.agents;
   const auto kinds = io::connector_kind_names();
   int kind = -1;
   for (size_t k = 0; k < kinds.size(); ++k)

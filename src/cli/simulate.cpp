@@ -109,7 +109,7 @@ int scene(const SceneArgs& a) {
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
   // agents are random until the agents stage provides trained ones
   Rng rng(seed_for(a.seed, 0, 0));
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < (a.uniform ? 1 : n); ++q) {
     agents.push_back(collective::random_agent(rng));
     if (n > 1) agents.back().anchors = collective::compute_anchors(agents.back());
@@ -119,7 +119,7 @@ int scene(const SceneArgs& a) {
   if (a.kind == "agent") {
     s = collective::agent_scene(agents[0], a.env);
   } else {
-    std::vector<const collective::Agent*> ptr;
+    std::vector<const morph::Agent*> ptr;
     for (int q = 0; q < n; ++q) ptr.push_back(&agents[a.uniform ? 0 : q]);
     s = a.kind == "pair" ? collective::pair_scene(*ptr[0], *ptr[1], conn, k, a.env)
                          : collective::chain_scene(ptr, conn, k, a.env);
@@ -219,7 +219,7 @@ int demo(const DemoArgs& a) {
     for (const auto& row : rows) std::printf("%s", row.c_str());
   } else {
     Rng rng(seed_for(a.seed, 0, 0));
-    collective::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
+    morph::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
     P.anchors = collective::compute_anchors(P);
     A.anchors = collective::compute_anchors(A);
     const std::vector<double> conn = morph::init_connector_params(rng);

@@ -48,7 +48,7 @@ void append_agent(sim::Scene& s, const Agent& a, double x_left) {
     s.rest_length.push_back(a.rest_length[r]);
     s.stiffness.push_back(morph::kAgentStiffness);
     s.amplitude.push_back(a.amplitude[r]);
-    s.damping.push_back(0.0);
+    s.damping.push_back(morph::kAgentDashpot);
   }
   s.agent_params.insert(s.agent_params.end(), a.params.begin(), a.params.end());
 }
@@ -85,17 +85,6 @@ void place_env(sim::Scene& s, const std::string& env, double feature_offset = 0)
 
 }  // namespace
 
-double body_length(const Agent& a) { return max_x(a) - min_x(a); }
-
-void update_rest_lengths(Agent& a) {
-  a.rest_length.resize(a.spring_i.size());
-  for (size_t r = 0; r < a.spring_i.size(); ++r) {
-    // the same expression as morph::agent_geometry, so that a recomputed length equals the original bits
-    const int i = a.spring_i[r], j = a.spring_j[r];
-    a.rest_length[r] = std::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
-  }
-}
-
 Agent random_agent(Rng& rng, const sim::Constants& c) {
   const uint32_t cells = morph::random_body(rng);
   const uint32_t springs = morph::random_springs(rng);
@@ -103,15 +92,7 @@ Agent random_agent(Rng& rng, const sim::Constants& c) {
 }
 
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c) {
-  Agent a;
-  a.cells = cells;
-  a.springs = springs;
-  const morph::AgentGeometry g = morph::agent_geometry(a.cells, a.springs);
-  a.rest_pos = g.rest_pos;
-  a.spring_i = g.spring_i;
-  a.spring_j = g.spring_j;
-  a.rest_length = g.rest_length;
-  a.amplitude = g.amplitude;
+  Agent a = morph::agent_geometry(cells, springs);
   a.params = morph::init_agent_params(rng, sim::agent_input_size(c));
   return a;
 }

@@ -7,26 +7,16 @@
 #include <vector>
 
 #include "common/rng.hpp"
+#include "morph/agent.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::collective {
 
-// the connector anchors of one agent (SPEC §6.1), as local mass indices 0..10
-struct Anchors {
-  int back_foot = -1, front_foot = -1, back_upper = -1, front_upper = -1;
-};
-
-// one agent as data: genotype, geometry (rest positions with min x = min y = 0) and controller
-struct Agent {
-  uint32_t cells = 0;                  // body genotype (28 lattice cells)
-  uint32_t springs = 0;                // spring genotype (21 bits, 1 = active)
-  std::vector<double> rest_pos;        // (11 x 2) u
-  std::vector<int32_t> spring_i, spring_j;  // (21) local mass indices
-  std::vector<double> rest_length;     // (21) u
-  std::vector<double> amplitude;       // (21) 0.15 active, 0 passive
-  std::vector<double> params;          // (P_a) controller, SPEC §4.3
-  Anchors anchors;                     // filled by compute_anchors
-};
+// the agent type is morphology's (morph/agent.hpp); these names stay here for the stage plans under mpi/ that
+// still spell them collective:: (to be dropped once those files have moved to src/stages)
+using morph::Agent;
+using morph::Anchors;
+using morph::body_length;
 
 // relative actuation amplitude of a connector's springs (SPEC §6.2; config key connectors.amplitude)
 inline constexpr double kConnectorAmplitude = 0.6;
@@ -41,15 +31,10 @@ struct Tether {
 inline constexpr Tether kWeakConnector{5e3};
 inline constexpr Tether kStrongConnector{3e4};
 
-// body length of an agent: max x − min x of its rest positions, u (SPEC §1)
-double body_length(const Agent& a);
-
 // a random valid agent with a freshly initialised controller
 Agent random_agent(Rng& rng, const sim::Constants& c = {});
 // an agent of the given body and spring genotypes at its lattice positions, with a fresh controller
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c = {});
-// rebuilds rest_length from rest_pos (after the rest positions changed)
-void update_rest_lengths(Agent& a);
 
 // an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
 // feature_offset: the environment's features start this much further ahead (deploy.feature_placement)

@@ -14,7 +14,7 @@ namespace divcoll::analysis {
 namespace {
 
 TEST(Behaviour, FramesAreCentredPositionsEveryKthStep) {
-  const collective::Agent a = testing::agent_with_anchors(5, 77);
+  const morph::Agent a = testing::agent_with_anchors(5, 77);
   const sim::Scene s = collective::agent_scene(a, "flat");
   sim::Simulator sim;
   sim::RunOptions opt;
@@ -42,7 +42,7 @@ TEST(Behaviour, FramesAreCentredPositionsEveryKthStep) {
 }
 
 TEST(Behaviour, PairSlotsAreTheTwoAgentsAndAloneMatchesItsOwnScene) {
-  const collective::Agent a = testing::agent_with_anchors(5, 78), c = testing::agent_with_anchors(5, 79);
+  const morph::Agent a = testing::agent_with_anchors(5, 78), c = testing::agent_with_anchors(5, 79);
   const std::vector<double> w(sim::connector_param_count(), 0.0);
   const sim::Scene s = collective::pair_scene(a, c, w, collective::kWeakConnector, "flat");
   sim::Simulator sim;

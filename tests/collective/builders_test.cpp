@@ -24,25 +24,25 @@ double max_x_of(const sim::Scene& s, int agent) {
   return m;
 }
 
-collective::Agent agent(uint64_t seed) {
+morph::Agent agent(uint64_t seed) {
   Rng rng = make_rng(seed, 5, 0);
-  collective::Agent a = collective::random_agent(rng);
+  morph::Agent a = collective::random_agent(rng);
   a.anchors = collective::compute_anchors(a, {}, 300);
   return a;
 }
 
 // a bar of 11 cells ... is not a valid body; use the flattest valid body: the one with the most cells in row 0
-collective::Agent passive_flat_agent() {
+morph::Agent passive_flat_agent() {
   uint32_t best = 0;
   int best_row0 = -1;
   for (uint32_t cells : morph::all_valid_placements()) {
     const int row0 = __builtin_popcount(cells & 0x7f);
     if (row0 > best_row0) best_row0 = row0, best = cells;
   }
-  collective::Agent a;
+  morph::Agent a;
   a.cells = best;
   a.springs = 1;
-  const morph::AgentGeometry g = morph::agent_geometry(a.cells, a.springs);
+  const morph::Agent g = morph::agent_geometry(a.cells, a.springs);
   a.rest_pos = g.rest_pos;
   a.spring_i = g.spring_i;
   a.spring_j = g.spring_j;
@@ -53,8 +53,8 @@ collective::Agent passive_flat_agent() {
 }
 
 TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
-  const collective::Agent a = passive_flat_agent();
-  const collective::Anchors an = collective::compute_anchors(a);
+  const morph::Agent a = passive_flat_agent();
+  const morph::Anchors an = collective::compute_anchors(a);
   double com = 0;
   for (int q = 0; q < 11; ++q) com += a.rest_pos[2 * q] / 11;
   // resting on its bottom row: every bottom-row mass touches at every step; the tie goes to the lowest
@@ -77,7 +77,7 @@ TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
 }
 
 TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
-  const collective::Agent p = agent(1), a = agent(2);
+  const morph::Agent p = agent(1), a = agent(2);
   Rng rng = make_rng(1, 6, 0);
   const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), collective::kWeakConnector, "flat");
   EXPECT_EQ(s.n_agents(), 2);
@@ -117,9 +117,9 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
 }
 
 TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < 7; ++q) agents.push_back(agent(10 + q));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   Rng rng = make_rng(2, 6, 0);
   const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), collective::kWeakConnector, "flat");

@@ -269,7 +269,7 @@ TEST(ConnectorOpt, AntitheticEsImprovesAKnownObjectiveAndResumesFromItsState) {
 }
 
 TEST(ConnectorOpt, TruncatedBackpropagationEqualsTheFullGradientWhenTheWindowCoversTheEpisode) {
-  const collective::Agent p = testing::agent_with_anchors(1, 77), q = testing::agent_with_anchors(2, 77);
+  const morph::Agent p = testing::agent_with_anchors(1, 77), q = testing::agent_with_anchors(2, 77);
   Rng wrng = make_rng(4, 1, 0);
   const std::vector<double> w = morph::init_connector_params(wrng, 1.0);
   sim::Simulator sim;

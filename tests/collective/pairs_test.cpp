@@ -19,14 +19,14 @@ void PrintTo(const Tether& t, std::ostream* os) { *os << "Tether{k " << t.stiffn
 }  // namespace collective
 namespace {
 
-collective::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
+morph::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
 
 // the training loss of SPEC §6.4 on one batch, and its gradient w.r.t. the connector weights
 struct Loss {
   double value = 0;
   std::vector<double> grad;
 };
-Loss batch_loss(const std::vector<collective::Agent>& agents, const std::vector<std::pair<int, int>>& batch,
+Loss batch_loss(const std::vector<morph::Agent>& agents, const std::vector<std::pair<int, int>>& batch,
                 const std::vector<double>& w, const collective::Tether& k, const std::string& env, int steps, bool grad) {
   sim::Simulator sim;
   Loss l;
@@ -47,7 +47,7 @@ class PairLossGradient : public ::testing::TestWithParam<std::pair<const char*, 
 // directions, for a weak and a strong connector on flat and on a novel environment
 TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
   const auto [env, k] = GetParam();
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (uint64_t s = 0; s < 4; ++s) agents.push_back(agent(s));
   Rng prng = make_rng(3, 1, 0);
   const auto batch = collective::random_pairs(prng, 4, 3);
@@ -92,7 +92,7 @@ INSTANTIATE_TEST_SUITE_P(WeakAndStrong, PairLossGradient,
 // connectors.amplitude = 0 makes passive tethers: the connector network's output moves no spring, so travel does
 // not depend on its weights and their gradient is exactly zero; any other amplitude lets the weights act
 TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot) {
-  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  const std::vector<morph::Agent> agents = {agent(1), agent(2)};
   Rng rng = make_rng(5, 9, 0);
   const std::vector<double> w = morph::init_connector_params(rng, 1.0), w2 = morph::init_connector_params(rng, 1.0);
   ASSERT_NE(w, w2);
@@ -115,7 +115,7 @@ TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot
 // as it does alone from the same start (its masses' positions equal at every step, bit for bit); the connector's
 // weights change nothing and get a zero gradient. With a dashpot the agents feel each other again
 TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
-  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  const std::vector<morph::Agent> agents = {agent(1), agent(2)};
   Rng rng = make_rng(5, 10, 0);
   const std::vector<double> w = morph::init_connector_params(rng, 1.0);
   const io::RunConfig cfg = io::apply_overrides(io::default_config(), {"connectors.follower=true"});
@@ -183,11 +183,11 @@ TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithIts
 }
 
 TEST(Chains, TravelInBodyLengthsIsTravelOverTheMeanBodyLength) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (uint64_t s = 0; s < 5; ++s) agents.push_back(agent(10 + s));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   double bl = 0;
-  for (const auto& a : agents) ptr.push_back(&a), bl += collective::body_length(a) / 5;
+  for (const auto& a : agents) ptr.push_back(&a), bl += morph::body_length(a) / 5;
   Rng wrng = make_rng(6, 1, 0);
   const auto w = morph::init_connector_params(wrng, 0.1);
   sim::Simulator sim;

@@ -14,7 +14,7 @@
 namespace divcoll {
 namespace {
 
-collective::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed, 3); }
+morph::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed, 3); }
 
 std::vector<double> make_conn(uint64_t seed) {
   Rng rng = make_rng(seed, 4, 0);
@@ -54,7 +54,7 @@ TEST(Engine, FreeFallMatchesClosedForm) {
 }
 
 TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
-  const collective::Agent a = make_agent(1), b = make_agent(2);
+  const morph::Agent a = make_agent(1), b = make_agent(2);
   sim::Scene s = collective::pair_scene(a, b, make_conn(1), collective::kWeakConnector, "flat");
   s.env.gravity = 0;
   s.env.damping = 0;
@@ -81,7 +81,7 @@ TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
 }
 
 TEST(Engine, DampingRemovesEnergyFromPassiveBody) {
-  collective::Agent a = make_agent(3);
+  morph::Agent a = make_agent(3);
   for (double& amp : a.amplitude) amp = 0;  // passive
   sim::Scene s = collective::agent_scene(a, "flat");
   s.env.gravity = 0;
@@ -144,7 +144,7 @@ TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
   const bool features = io::environment_table(GetParam()).relative.size() > 0;
   const double allowed = features ? 5e-3 : 1e-9;  // u
   for (uint64_t seed = 0; seed < 3; ++seed) {
-    const collective::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
+    const morph::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
     std::vector<double> conn = make_conn(seed);
     for (double& w : conn) w *= 3.0;  // vigorous actuation
     sim::Scene s = collective::pair_scene(a, b, conn, collective::kWeakConnector, GetParam());
@@ -180,7 +180,7 @@ INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(io
                          [](const auto& info) { return info.param; });
 
 TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
-  const collective::Agent a = make_agent(4), b = make_agent(5);
+  const morph::Agent a = make_agent(4), b = make_agent(5);
   const sim::Scene s = collective::pair_scene(a, b, make_conn(4), collective::kWeakConnector, "gap");
   sim::RunOptions opt;
   opt.steps = 300;
@@ -193,7 +193,7 @@ TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
 }
 
 TEST(Engine, StrongConnectorPairIsSubsteppedAndFinite) {
-  const collective::Agent a = make_agent(6), b = make_agent(7);
+  const morph::Agent a = make_agent(6), b = make_agent(7);
   const sim::Scene s = collective::pair_scene(a, b, make_conn(6), collective::kStrongConnector, "flat");
   sim::RunOptions opt;
   opt.steps = 1000;
@@ -234,9 +234,9 @@ TEST(Engine, StiffSceneIsSubsteppedAutomaticallyOrRefusedWhenItForbidsSubsteps) 
 }
 
 TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < 20; ++q) agents.push_back(make_agent(100 + q));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   for (const std::string& env : io::environment_names()) {
     const sim::Scene s = collective::chain_scene(ptr, make_conn(9), collective::kWeakConnector, env);
@@ -285,7 +285,7 @@ TEST(Engine, SpringOfNearZeroLengthStaysFinite) {
 }
 
 TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
-  const collective::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
+  const morph::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
   const std::vector<double> conn = make_conn(30);
   std::vector<sim::Scene> batch = {
       collective::pair_scene(a, b, conn, collective::kWeakConnector, "flat"),
@@ -344,7 +344,7 @@ TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
 }
 
 TEST(Engine, BatchOfDifferentShapesIsRefused) {
-  const collective::Agent a = make_agent(40), b = make_agent(41);
+  const morph::Agent a = make_agent(40), b = make_agent(41);
   std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat"),
                                    collective::pair_scene(a, b, make_conn(40), collective::kWeakConnector, "flat")};
   sim::Simulator sim;

@@ -28,7 +28,7 @@ struct StageState {
 
 StageState make_state(uint64_t seed) {
   Rng rng = make_rng(seed, 3, 0);
-  collective::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
+  morph::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
   p.anchors = collective::compute_anchors(p, {}, 100);
   a.anchors = collective::compute_anchors(a, {}, 100);
   Vec conn = morph::init_connector_params(rng);
