@@ -142,7 +142,7 @@ class AgentsPlan final : public Plan {
   std::string compute(const std::string& bytes) override {
     const auto t0 = std::chrono::steady_clock::now();
     Trained t{unpack<evo::Individual>(bytes)};
-    t.x.train = evo::train_agent(t.x.agent, gd_, sim_);
+    t.x.train = evo::train_agent(t.x.agent, gd_, io::run_physics(cfg_), sim_);
     t.x.descriptor = spec_.spring_descriptor ? evo::spring_layout_descriptor(t.x.agent) : evo::agent_descriptor(t.x.agent);
     t.train_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return pack(t);

@@ -94,7 +94,7 @@ class ConnectorsPlan : public Plan {
     const ConnectorSlot& s = slots_[t.slot];
     const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
                                 weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
-    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, ro, nullptr);
+    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, physics_.contact, ro, nullptr);
     return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad, static_cast<uint8_t>(o.redone_in_double)};
   }
   // row `row` of each group's (rows × columns) dataset <group>/<name>, from per-slot values
@@ -148,6 +148,7 @@ class ConnectorsPlan : public Plan {
   }
 
   const io::RunConfig& cfg_;
+  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
   const std::vector<collective::Agent>& agents_;
   const std::vector<ConnectorSlot>& slots_;
   const TrainSpec spec_;
@@ -195,7 +196,7 @@ class PlainConnectorsPlan final : public ConnectorsPlan {
     return items;
   }
   std::string compute(const std::string& item) override {
-    sim::RunOptions ro;
+    sim::RunOptions ro = physics_.options();
     ro.steps = spec_.episode_steps;
     ro.grad = true;
     ro.agent_param_grad = false;  // the agents stay frozen
@@ -330,7 +331,7 @@ class ExtendedConnectorsPlan final : public ConnectorsPlan {
   std::vector<std::string> items(int) override { return items_; }
   std::string compute(const std::string& item) override {
     const PairTask t = unpack<PairTask>(item);
-    sim::RunOptions ro;
+    sim::RunOptions ro = physics_.options();
     ro.steps = spec_.episode_steps;
     ro.grad = t.grad != 0;
     ro.agent_param_grad = false;  // the agents stay frozen

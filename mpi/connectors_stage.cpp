@@ -10,7 +10,8 @@
 
 namespace divcoll::mpi {
 
-std::vector<collective::Agent> load_population(MPI_Comm, const io::h5::Node& file, const std::string& group) {
+std::vector<collective::Agent> load_population(MPI_Comm, const io::RunConfig& cfg, const io::h5::Node& file,
+                                               const std::string& group) {
   // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
   // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
   const std::string at = io::anchors_path(group);
@@ -21,7 +22,7 @@ std::vector<collective::Agent> load_population(MPI_Comm, const io::h5::Node& fil
   if (stored) io::read_anchors(file, at, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
   if (!stored)
-    for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a, io::run_physics(cfg));
   return agents;
 }
 
@@ -45,7 +46,7 @@ void run_connectors_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File&
   const auto& C = cfg.connectors;
   const std::vector<std::string>& kinds = C.kinds;
   const int K = static_cast<int>(kinds.size()), R = C.replicates;
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const std::vector<collective::Agent> agents = load_population(comm, cfg, file);
 
   io::h5::Node stage = file.group("connectors");
   stage.write_string("kinds", join(kinds));

@@ -28,8 +28,8 @@ namespace divcoll::mpi {
 inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
 // the final agent population of the run file on every rank, with its anchors: the stored ones
 // (io::anchors_path: connectors/anchors, graded/<name>/connectors/anchors) once its connector training stored
-// them, otherwise computed (deterministically)
-std::vector<collective::Agent> load_population(MPI_Comm comm, const io::h5::Node& file,
+// them, otherwise computed (deterministically, under the run's physics)
+std::vector<collective::Agent> load_population(MPI_Comm comm, const io::RunConfig& cfg, const io::h5::Node& file,
                                                const std::string& group = "agents");
 // stores the anchors of `agents` (the population of `group`) once, at io::anchors_path(group)
 void store_anchors(MPI_Comm comm, const io::h5::File& file, const std::string& group,

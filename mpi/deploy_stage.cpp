@@ -97,17 +97,17 @@ class DeployPlan final : public Plan {
     DeployDone d;
     const bool hidden = e.type >= 0 && std::find(hidden_types_.begin(), hidden_types_.end(), e.type) != hidden_types_.end();
     collective::PairOutcome o;
-    sim::RunOptions opt;
+    sim::RunOptions opt = physics_.options();
     opt.steps = D_.episode_steps;
     opt.record = early_;
     sim::RunResult full;
     if (e.type < 0) {
-      o = collective::run_alone(sim_, agents_[e.a], env, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
+      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
       if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / collective::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
       opt.record_inputs = hidden && inputs_;
-      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, opt, &full);
+      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, physics_.contact, opt, &full);
       if (early_)
         d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D_.early_step) /
                      (0.5 * (collective::body_length(agents_[e.a]) + collective::body_length(agents_[e.b])));
@@ -201,6 +201,7 @@ class DeployPlan final : public Plan {
 
  private:
   const io::RunConfig& cfg_;
+  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
   const io::RunConfig::Deploy& D_;
   const std::vector<collective::Agent>& agents_;
   const std::vector<std::string> types_;
@@ -224,7 +225,7 @@ class DeployPlan final : public Plan {
 
 void run_deploy_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                       const std::function<void()>& checkpoint) {
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const std::vector<collective::Agent> agents = load_population(comm, cfg, file);
   const int R = cfg.connectors.replicates;
   // the collective types: every trained kind on uniform and on diverse pairs
   std::vector<std::string> types;

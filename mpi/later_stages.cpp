@@ -50,13 +50,13 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
 // one agent alone, a pair (or, with `chains`, a heap-order chain), forward only
 EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<collective::Agent>& agents,
                           const std::vector<std::vector<double>>& weights, const collective::Tether& tether,
-                          const std::vector<std::string>& envs, int steps, bool chains) {
+                          const sim::RunPhysics& physics, const std::vector<std::string>& envs, int steps, bool chains) {
   std::vector<const collective::Agent*> ptr;
   for (int32_t a : e.agents) ptr.push_back(&agents[a]);
   const collective::PairOutcome o =
-      ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
-      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], tether, envs[e.env], steps, false)
-                      : collective::run_chain(sim, ptr, weights[e.weights], tether, envs[e.env], steps);
+      ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], physics, steps)
+      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], tether, envs[e.env], physics, steps, false)
+                      : collective::run_chain(sim, ptr, weights[e.weights], tether, envs[e.env], physics, steps);
   return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
 }
 
@@ -84,10 +84,10 @@ class EpisodesPlan final : public Plan {
   };
   using Summary = std::function<std::string(int env, const std::vector<EpisodeDone>& round)>;
   EpisodesPlan(std::string label, std::string group, const std::vector<collective::Agent>& agents,
-               std::vector<std::vector<double>> weights, collective::Tether tether, std::vector<std::string> envs, int steps,
+               std::vector<std::vector<double>> weights, collective::Tether tether, sim::RunPhysics physics, std::vector<std::string> envs, int steps,
                std::vector<Part> parts, std::function<std::vector<GroupEpisode>(int env)> round_items, Summary summary)
       : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
-        tether_(tether), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
+        tether_(tether), physics_(physics), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
         round_items_(std::move(round_items)), summary_(std::move(summary)) {}
   Info info() const override {
     Info i{label_, group_, "envs_done", "environment", "episodes", 1};
@@ -105,7 +105,7 @@ class EpisodesPlan final : public Plan {
   }
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, envs_, steps_, false));
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, physics_, envs_, steps_, false));
   }
   void reduce(int e, int64_t, const std::string& bytes) override { done_[e].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int e) override {
@@ -136,6 +136,7 @@ class EpisodesPlan final : public Plan {
   const std::vector<collective::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
   const collective::Tether tether_;
+  const sim::RunPhysics physics_;  // run.contact, run.precision
   const std::vector<std::string> envs_;
   const int steps_;
   const std::vector<Part> parts_;
@@ -154,7 +155,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
   const auto& S = cfg.specialists;
   const std::vector<std::string> envs = novel_environments(cfg);
   const int E = static_cast<int>(envs.size()), R = S.replicates, NP = cfg.deploy.pairs;
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const std::vector<collective::Agent> agents = load_population(comm, cfg, file);
   const int pop = static_cast<int>(agents.size());
 
   io::h5::Node stage = file.group("specialists");
@@ -193,7 +194,7 @@ void run_specialists_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File
                   bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
     return std::string(b);
   };
-  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), envs,
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
                     cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   drive(comm, cfg, file, plan, checkpoint);
@@ -264,7 +265,7 @@ class ScalingPlan final : public Plan {
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
     return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"),
-                              cfg_.deploy.environments, S_.episode_steps, true));
+                              io::run_physics(cfg_), cfg_.deploy.environments, S_.episode_steps, true));
   }
   void reduce(int ei, int64_t, const std::string& bytes) override { done_[ei].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int ei) override {
@@ -306,7 +307,7 @@ class ScalingPlan final : public Plan {
 void run_scaling_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file,
                        const std::function<void()>& checkpoint) {
   const int R = cfg.connectors.replicates;
-  const std::vector<collective::Agent> agents = load_population(comm, file);
+  const std::vector<collective::Agent> agents = load_population(comm, cfg, file);
   std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
   for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
   ScalingPlan plan(cfg, agents, std::move(weights));
@@ -368,7 +369,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
         spec.fixed_springs = springs;
       }
       run_with_status(file, spec.group, checkpoint, [&] { run_agents_stage(comm, pc, file, checkpoint, spec); });
-      const std::vector<collective::Agent> agents = load_population(comm, file, spec.group);
+      const std::vector<collective::Agent> agents = load_population(comm, cfg, file, spec.group);
 
       // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
       if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
@@ -407,7 +408,7 @@ void run_graded_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& fil
       };
       const uint64_t uG = GP, uR = R, uN = NP;
       EpisodesPlan plan(std::string("graded ") + names[v] + " deploy", base, agents, weights,
-                        collective::tether(cfg, "weak_diverse"), envs, cfg.deploy.episode_steps,
+                        collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs, cfg.deploy.episode_steps,
                         {{base + "/deploy/agents", {uG}}, {base + "/deploy/pairs", {uR, uN}}}, round_items, summary);
       drive(comm, cfg, file, plan, checkpoint);
     });

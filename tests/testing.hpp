@@ -14,8 +14,14 @@
 
 #include "collective/builders.hpp"
 #include "morph/body.hpp"
+#include "sim/engine.hpp"
 
 namespace divcoll::testing {
+// the spec's physics, Coulomb contact and the networks in double: what the tests build and run unless they say
+// otherwise (nothing in the process holds a run's physics: every scene and episode is given it)
+inline constexpr sim::RunPhysics kSpec{};
+inline constexpr sim::ContactLaw kCoulomb = sim::ContactLaw::coulomb;
+
 // the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
 // else the CMake cache variable of the same name (default: ../shared beside the checkout)
 inline std::string shared_dir() {
@@ -50,7 +56,7 @@ inline std::string readme() { return doc("README.md"); }
 inline morph::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
   Rng rng = make_rng(seed, stream, 0);
   morph::Agent a = collective::random_agent(rng);
-  a.anchors = collective::compute_anchors(a, {}, 300);
+  a.anchors = collective::compute_anchors(a, kSpec, {}, 300);
   return a;
 }
 
@@ -66,8 +72,8 @@ inline const GradientPair& gradient_pair() {
     Rng rng = make_rng(11, 1, 0);
     f.p = collective::random_agent(rng);
     f.a = collective::random_agent(rng);
-    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
-    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
+    f.p.anchors = collective::compute_anchors(f.p, kSpec, {}, 300);
+    f.a.anchors = collective::compute_anchors(f.a, kSpec, {}, 300);
     f.conn = morph::init_connector_params(rng);
     for (double& w : f.conn) w += 0.05 * normal(rng);
     return f;

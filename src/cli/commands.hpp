@@ -107,6 +107,9 @@ int grad_diag(const GradDiagArgs& a);
 struct RunAgents {
   io::RunConfig cfg;
   std::vector<morph::Agent> agents;
+  // how these commands run the run's episodes (the anchors' too): under its contact law (run.contact), the
+  // networks in double whatever run.precision says
+  sim::RunPhysics physics;
 };
 RunAgents load_run_agents(const std::string& run, const std::vector<std::string>& overrides);
 

@@ -37,7 +37,7 @@ int gd_compare(const GdCompareArgs& a) {
     for (int i = 0; i < a.agents; ++i) {
       Rng rng = make_rng(a.seed, 77, i);
       morph::Agent ag = collective::random_agent(rng);
-      const evo::TrainResult r = evo::train_agent(ag, opt, sim);
+      const evo::TrainResult r = evo::train_agent(ag, opt, sim::RunPhysics{}, sim);  // the spec's: coulomb, double
       fit.push_back(r.fitness_bl);
       // how far below the best evaluation the curve ended (the noise of the rule)
       double best = -1e300;

@@ -77,10 +77,10 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
   }
 }
 
-void place_env(sim::Scene& s, const std::string& env, double feature_offset = 0) {
+void place_env(sim::Scene& s, const std::string& env, sim::ContactLaw law, double feature_offset = 0) {
   double mx = s.x0[0];
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset);
+  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset, law);
 }
 
 }  // namespace
@@ -97,17 +97,18 @@ Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constant
   return a;
 }
 
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c, double feature_offset) {
+sim::Scene agent_scene(const Agent& a, const std::string& env, sim::ContactLaw law, const sim::Constants& c,
+                       double feature_offset) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, a, 0.0);
-  place_env(s, env, feature_offset);
+  place_env(s, env, law, feature_offset);
   return s;
 }
 
-Anchors compute_anchors(const Agent& a, const sim::Constants& c, int steps) {
-  const sim::Scene s = agent_scene(a, "flat", c);
-  sim::RunOptions opt;
+Anchors compute_anchors(const Agent& a, const sim::RunPhysics& physics, const sim::Constants& c, int steps) {
+  const sim::Scene s = agent_scene(a, "flat", physics.contact, c);
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
   opt.record = true;
   const sim::RunResult r = sim::simulate(s, opt);
@@ -180,19 +181,19 @@ Anchors compute_anchors(const Agent& a, const sim::Constants& c, int steps) {
 }
 
 sim::Scene pair_scene(const Agent& P, const Agent& A, const std::vector<double>& conn, const Tether& tether,
-                      const std::string& env, const sim::Constants& c) {
+                      const std::string& env, sim::ContactLaw law, const sim::Constants& c) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, P, 0.0);
   append_agent(s, A, (max_x(P) - min_x(P)) + 0.05);
   append_connector(s, 0, 1, P.anchors, A.anchors, tether);
   s.connector_params = conn;
-  place_env(s, env);
+  place_env(s, env, law);
   return s;
 }
 
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& conn,
-                       const Tether& tether, const std::string& env, const sim::Constants& c) {
+                       const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c) {
   const int n = static_cast<int>(agents.size());
   DIVCOLL_THROW_UNLESS(n >= 2, "a chain needs at least 2 agents (got " << n << ")");
   // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − 0.05
@@ -209,7 +210,7 @@ sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vecto
   for (int k = 1; k < n; ++k) append_connector(s, k, (k - 1) / 2, agents[k]->anchors, agents[(k - 1) / 2]->anchors,
                                                tether);
   s.connector_params = conn;
-  place_env(s, env);
+  place_env(s, env, law);
   return s;
 }
 

@@ -8,6 +8,7 @@
 
 #include "common/rng.hpp"
 #include "morph/agent.hpp"
+#include "sim/engine.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::collective {
@@ -36,21 +37,25 @@ Agent random_agent(Rng& rng, const sim::Constants& c = {});
 // an agent of the given body and spring genotypes at its lattice positions, with a fresh controller
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c = {});
 
+// Every scene below is placed in a named built-in environment under the contact law `law` (the run's: sim::RunPhysics,
+// io::run_physics), which the scene then carries (sim::Environment::contact).
+
 // an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
 // feature_offset: the environment's features start this much further ahead (deploy.feature_placement)
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c = {}, double feature_offset = 0);
+sim::Scene agent_scene(const Agent& a, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {},
+                       double feature_offset = 0);
 
-// SPEC §6.1: anchors from the agent's own 1000-step run on flat ground
-Anchors compute_anchors(const Agent& a, const sim::Constants& c = {}, int steps = 1000);
+// SPEC §6.1: anchors from the agent's own 1000-step run on flat ground, under the run's physics
+Anchors compute_anchors(const Agent& a, const sim::RunPhysics& physics, const sim::Constants& c = {}, int steps = 1000);
 
 // SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + 0.05)
 // joined by one connector with the given springs; both agents need anchors
 sim::Scene pair_scene(const Agent& posterior, const Agent& anterior, const std::vector<double>& connector_params,
-                      const Tether& tether, const std::string& env, const sim::Constants& c = {});
+                      const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {});
 
 // SPEC §7.4: a chain of agents in binary-tree heap order: agent 0 is front-most, agents 2k+1 and 2k+2 hang
 // behind agent k (same x, overlapping); connector k−1 joins child k (posterior) to its parent (anterior)
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& connector_params,
-                       const Tether& tether, const std::string& env, const sim::Constants& c = {});
+                       const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {});
 
 }  // namespace divcoll::collective

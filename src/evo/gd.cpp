@@ -86,9 +86,10 @@ struct Eval {
   std::vector<double> g_params, g_rest;  // gradient of travel
 };
 
-Eval evaluate(const morph::Agent& a, const GdOptions& opt, sim::Simulator& sim, bool grad) {
-  const sim::Scene s = collective::agent_scene(a, "flat");
-  sim::RunOptions ro;
+Eval evaluate(const morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim,
+              bool grad) {
+  const sim::Scene s = collective::agent_scene(a, "flat", physics.contact);
+  sim::RunOptions ro = physics.options();
   ro.steps = opt.steps;
   ro.grad = grad;
   sim::RunResult r = sim.run(s, ro);
@@ -139,7 +140,7 @@ bool step_agent(morph::Agent& a, const std::vector<double>& g_params, const std:
   return true;
 }
 
-TrainResult train_agent(morph::Agent& a, const GdOptions& opt, sim::Simulator& sim) {
+TrainResult train_agent(morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim) {
   TrainResult out;
   Adam adam;  // ascent on travel: descent on −travel
   morph::Agent best = a;
@@ -147,7 +148,7 @@ TrainResult train_agent(morph::Agent& a, const GdOptions& opt, sim::Simulator& s
   sim::Status last_status = sim::Status::ok;
   for (int epoch = 0; epoch <= opt.epochs; ++epoch) {
     const bool update = epoch < opt.epochs;
-    const Eval e = evaluate(a, opt, sim, update);
+    const Eval e = evaluate(a, opt, physics, sim, update);
     out.curve_u.push_back(e.travel);
     last_status = e.status;
     if (e.status != sim::Status::ok) break;  // keep what we had before this step

@@ -49,8 +49,8 @@ using morph::body_length;
 // through x(0), through the rest lengths, and through the shift that keeps the lowest mass at y = 0
 std::vector<double> rest_gradient(const morph::Agent& a, const sim::RunResult& r);
 
-// trains `a` in place and returns its fitness; `sim` is reused workspace
-TrainResult train_agent(morph::Agent& a, const GdOptions& opt, sim::Simulator& sim);
+// trains `a` in place on flat ground under the run's `physics` and returns its fitness; `sim` is reused workspace
+TrainResult train_agent(morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim);
 
 // one epoch's update of `a` from the gradient of travel w.r.t. its weights (`g_params`) and rest positions
 // (`g_rest`, 11×2), by opt.rule (`adam` holds Adam's moments, `epoch` counts from 0); returns false and leaves

@@ -32,7 +32,7 @@ Loss batch_loss(const std::vector<morph::Agent>& agents, const std::vector<std::
   Loss l;
   l.grad.assign(w.size(), 0.0);
   for (const auto& [a, b] : batch) {
-    const collective::PairOutcome o = collective::run_pair(sim, agents[a], agents[b], w, k, env, steps, grad);
+    const collective::PairOutcome o = collective::run_pair(sim, agents[a], agents[b], w, k, env, testing::kSpec, steps, grad);
     EXPECT_EQ(o.status, sim::Status::ok);
     l.value -= o.travel_u / batch.size();
     if (grad)
@@ -98,13 +98,13 @@ TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot
   ASSERT_NE(w, w2);
   sim::Simulator sim;
   const collective::Tether passive{collective::kWeakConnector.stiffness, 0.0};
-  const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", 200, true);
-  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", 200, true);
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", testing::kSpec, 200, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", testing::kSpec, 200, true);
   ASSERT_EQ(a.status, sim::Status::ok);
   EXPECT_EQ(a.travel_u, b.travel_u);
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
-  const auto c = collective::run_pair(sim, agents[0], agents[1], w, collective::kWeakConnector, "flat", 200, true);
-  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, collective::kWeakConnector, "flat", 200, true);
+  const auto c = collective::run_pair(sim, agents[0], agents[1], w, collective::kWeakConnector, "flat", testing::kSpec, 200, true);
+  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, collective::kWeakConnector, "flat", testing::kSpec, 200, true);
   EXPECT_NE(c.travel_u, d.travel_u);
   double gn = 0;
   for (double g : c.grad) gn += g * g;
@@ -126,12 +126,12 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   sim::RunOptions opt;
   opt.steps = T;
   opt.record = true;
-  const sim::Scene pair = collective::pair_scene(agents[0], agents[1], w, follower, "flat");
+  const sim::Scene pair = collective::pair_scene(agents[0], agents[1], w, follower, "flat", testing::kCoulomb);
   const sim::RunResult pr = sim::simulate(pair, opt);
   ASSERT_EQ(pr.status, sim::Status::ok);
   const int N = pair.n_masses();
   for (int k = 0; k < 2; ++k) {
-    sim::Scene alone = collective::agent_scene(agents[k], "flat");
+    sim::Scene alone = collective::agent_scene(agents[k], "flat", testing::kCoulomb);
     for (int q = 0; q < sim::kAgentMasses; ++q) {
       const int i = pair.agent_mass_index[k * sim::kAgentMasses + q];
       alone.x0[2 * q] = pair.x0[2 * i], alone.x0[2 * q + 1] = pair.x0[2 * i + 1];
@@ -155,14 +155,14 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   // the controller runs but moves nothing: other weights, the same travel, a zero gradient
   sim::Simulator sim;
   const std::vector<double> w2 = morph::init_connector_params(rng, 1.0);
-  const auto a = collective::run_pair(sim, agents[0], agents[1], w, follower, "flat", T, true);
-  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, follower, "flat", T, true);
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, follower, "flat", testing::kSpec, T, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, follower, "flat", testing::kSpec, T, true);
   EXPECT_EQ(a.travel_u, b.travel_u);
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
   // a dashpot couples the two again
   const collective::Tether damped =
       collective::tether(io::apply_overrides(cfg, {"connectors.damping=20"}), "weak_diverse");
-  EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", T, false).travel_u, a.travel_u);
+  EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", testing::kSpec, T, false).travel_u, a.travel_u);
 }
 
 TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithItself) {
@@ -191,7 +191,7 @@ TEST(Chains, TravelInBodyLengthsIsTravelOverTheMeanBodyLength) {
   Rng wrng = make_rng(6, 1, 0);
   const auto w = morph::init_connector_params(wrng, 0.1);
   sim::Simulator sim;
-  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, collective::kWeakConnector, "flat", 300);
+  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, collective::kWeakConnector, "flat", testing::kSpec, 300);
   ASSERT_EQ(o.status, sim::Status::ok);
   EXPECT_DOUBLE_EQ(o.travel_bl, o.travel_u / bl);
   EXPECT_NE(o.travel_u, 0.0);

@@ -14,6 +14,7 @@
 #include "evo/gd.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
@@ -37,7 +38,7 @@ evo::GdOptions short_opts(int epochs, int steps, evo::GdRule rule = evo::GdRule:
 double travel_of(const morph::Agent& a, int steps) {
   sim::RunOptions ro;
   ro.steps = steps;
-  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat"), ro);
+  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat", testing::kCoulomb), ro);
   EXPECT_EQ(r.status, sim::Status::ok) << r.message;
   return r.travel;
 }
@@ -64,7 +65,7 @@ RestGrad rest_gradient(const morph::Agent& a, int steps) {
   sim::RunOptions ro;
   ro.steps = steps;
   ro.grad = true;
-  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat"), ro);
+  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat", testing::kCoulomb), ro);
   EXPECT_EQ(r.status, sim::Status::ok) << r.message;
   RestGrad out;
   out.travel = r.travel;
@@ -102,7 +103,7 @@ TEST(GdTrain, KeepBestNeverFallsBelowUntrainedAndUsuallyImproves) {
   const int n = 5;
   for (uint64_t seed = 1; seed <= n; ++seed) {
     morph::Agent a = agent(seed);
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     ASSERT_EQ(r.curve_u.size(), 9u);
     EXPECT_GE(r.travel_u, r.curve_u[0]) << "seed " << seed;
@@ -156,7 +157,7 @@ TEST(GdTrain, KeepBestAndAdamReturnTheCurveMaximumPaperTheLastEvaluation) {
       opt.adam_lr = 0.03;
       morph::Agent a = agent(seed);
       sim::Simulator sim;
-      const evo::TrainResult r = evo::train_agent(a, opt, sim);
+      const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
       const std::string what = std::string(evo::gd_rule_name(rule)) + " seed " + std::to_string(seed);
       ASSERT_EQ(r.status, sim::Status::ok) << what;
       ASSERT_EQ(r.curve_u.size(), 7u) << what;
@@ -181,9 +182,9 @@ TEST(GdTrain, PaperCanEndBelowItsBestWhereKeepBestCannot) {
     opt.step = 0.5;
     morph::Agent a = agent(seed), b = agent(seed);
     sim::Simulator sim;
-    const evo::TrainResult rp = evo::train_agent(a, opt, sim);
+    const evo::TrainResult rp = evo::train_agent(a, opt, testing::kSpec, sim);
     opt.rule = evo::GdRule::keep_best;
-    const evo::TrainResult rk = evo::train_agent(b, opt, sim);
+    const evo::TrainResult rk = evo::train_agent(b, opt, testing::kSpec, sim);
     ASSERT_EQ(rp.curve_u, rk.curve_u) << "the rules take the same steps";
     const double best = *std::max_element(rp.curve_u.begin(), rp.curve_u.end());
     if (rp.travel_u < best) ++paper_dropped;
@@ -236,7 +237,7 @@ TEST(GdRestGradient, OneEpochMovesRestPositionsAlongTheGradient) {
     opt.rest_move_max = 1e-6;  // first-order regime (contacts change at ~1e-4)
     morph::Agent a = a0;
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     EXPECT_EQ(a.params, a0.params);
     // expected: the mass with the largest gradient moves rest_move_max, then min x = min y = 0
@@ -366,7 +367,7 @@ TEST(GdMoveRest, TrainingKeepsRestLengthsInBounds) {
   for (uint64_t seed : {2, 7}) {
     morph::Agent a = agent(seed);
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     expect_well_formed(a, opt, "seed " + std::to_string(seed));
   }
@@ -379,7 +380,7 @@ TEST(GdTrain, RestMovesOffLeavesRestPositionsBitIdentical) {
     const morph::Agent a0 = agent(5);
     morph::Agent a = a0;
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     EXPECT_EQ(a.rest_pos, a0.rest_pos) << evo::gd_rule_name(rule);
     EXPECT_EQ(a.rest_length, a0.rest_length) << evo::gd_rule_name(rule);
@@ -398,7 +399,7 @@ TEST(GdTrain, NaNParamsEndWithStatusNanAndNaNFitness) {
   sim::Simulator sim;
   evo::TrainResult r;
   for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::paper, evo::GdRule::adam}) {
-    ASSERT_NO_THROW(r = evo::train_agent(a, short_opts(3, 200, rule), sim));
+    ASSERT_NO_THROW(r = evo::train_agent(a, short_opts(3, 200, rule), testing::kSpec, sim));
     EXPECT_EQ(r.status, sim::Status::nan) << evo::gd_rule_name(rule);
     EXPECT_TRUE(std::isnan(r.travel_u));
     EXPECT_TRUE(std::isnan(r.fitness_bl));
@@ -414,7 +415,7 @@ TEST(GdTrain, NaNParamsEndWithStatusNanAndNaNFitness) {
   }
   // the same simulator then trains a healthy agent normally, and its parameters stay finite
   morph::Agent b = agent(9);
-  r = evo::train_agent(b, short_opts(3, 200), sim);
+  r = evo::train_agent(b, short_opts(3, 200), testing::kSpec, sim);
   EXPECT_EQ(r.status, sim::Status::ok);
   EXPECT_TRUE(std::isfinite(r.fitness_bl));
   for (double w : b.params) ASSERT_TRUE(std::isfinite(w));
@@ -428,9 +429,9 @@ TEST(GdTrain, SameAgentTwoSimulatorsBitIdentical) {
     sim::Simulator s1, s2;
     // s2 first runs something else, so its workspace is not fresh
     morph::Agent other = agent(12);
-    evo::train_agent(other, short_opts(1, 300), s2);
-    const evo::TrainResult ra = evo::train_agent(a, opt, s1);
-    const evo::TrainResult rb = evo::train_agent(b, opt, s2);
+    evo::train_agent(other, short_opts(1, 300), testing::kSpec, s2);
+    const evo::TrainResult ra = evo::train_agent(a, opt, testing::kSpec, s1);
+    const evo::TrainResult rb = evo::train_agent(b, opt, testing::kSpec, s2);
     EXPECT_EQ(a.params, b.params);
     EXPECT_EQ(a.rest_pos, b.rest_pos);
     EXPECT_EQ(a.rest_length, b.rest_length);
