@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
     agents.back().anchors = collective::compute_anchors(agents.back(), AB_PHYSICS {}, 300);
   }
   auto conn = morph::init_connector_params(rng);
-  const collective::Tether weak = collective::kWeakConnector;
+  const collective::Tether weak{5e3, 0.6};  // the default config's weak connector
   std::vector<sim::Scene> scenes;
   for (int b = 0; b < batch; ++b) {
     if (kind == "agent") scenes.push_back(collective::agent_scene(agents[b % 24], "flat", AB_LAW {}));

@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "collective/builders.hpp"
+#include "collective/deploy_variants.hpp"
+#include "config/config.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
 
@@ -21,6 +23,10 @@ namespace divcoll::testing {
 // otherwise (nothing in the process holds a run's physics: every scene and episode is given it)
 inline constexpr sim::RunPhysics kSpec{};
 inline constexpr sim::ContactLaw kCoulomb = sim::ContactLaw::coulomb;
+// the weak and the strong connector of the default config (connectors.weak_stiffness, strong_stiffness,
+// amplitude, damping: the schema is their one home)
+inline collective::Tether weak_connector() { return collective::strength_tether(io::default_config(), "weak"); }
+inline collective::Tether strong_connector() { return collective::strength_tether(io::default_config(), "strong"); }
 
 // the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
 // else the CMake cache variable of the same name (default: ../shared beside the checkout)

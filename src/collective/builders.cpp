@@ -185,7 +185,7 @@ sim::Scene pair_scene(const Agent& P, const Agent& A, const std::vector<double>&
   sim::Scene s;
   s.constants = c;
   append_agent(s, P, 0.0);
-  append_agent(s, A, (max_x(P) - min_x(P)) + 0.05);
+  append_agent(s, A, (max_x(P) - min_x(P)) + kAgentGap);
   append_connector(s, 0, 1, P.anchors, A.anchors, tether);
   s.connector_params = conn;
   place_env(s, env, law);
@@ -196,12 +196,12 @@ sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vecto
                        const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c) {
   const int n = static_cast<int>(agents.size());
   DIVCOLL_THROW_UNLESS(n >= 2, "a chain needs at least 2 agents (got " << n << ")");
-  // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − 0.05
+  // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − kAgentGap
   std::vector<double> left(n, 0.0);
   for (int k = 1; k < n; ++k) {
     const int parent = (k - 1) / 2;
     const double width = max_x(*agents[k]) - min_x(*agents[k]);
-    left[k] = left[parent] - 0.05 - width;
+    left[k] = left[parent] - kAgentGap - width;
   }
   const double shift = -*std::min_element(left.begin(), left.end());
   sim::Scene s;

@@ -19,18 +19,17 @@ using morph::Agent;
 using morph::Anchors;
 using morph::body_length;
 
-// relative actuation amplitude of a connector's springs (SPEC §6.2; config key connectors.amplitude)
-inline constexpr double kConnectorAmplitude = 0.6;
-
-// the springs of one connector (SPEC §6.2): all 5 get this stiffness, amplitude and dashpot
+// the springs of one connector (SPEC §6.2): all 5 get this stiffness, amplitude and dashpot. A run's come from its
+// config (collective::tether, strength_tether: connectors.weak_stiffness or strong_stiffness, amplitude, damping),
+// whose schema (config/config.cpp) is the one home of their defaults, the paper reading's 5000 / 30000 and 0.6
 struct Tether {
-  double stiffness = 0;                    // force/u (per unit mass)
-  double amplitude = kConnectorAmplitude;  // fraction of its rest length a spring's target length moves (0 = passive)
-  double damping = 0;                      // dashpot c_s, 1/s (SPEC §2.2; 0 = SPEC §6.2; connectors.damping)
+  double stiffness = 0;  // force/u (per unit mass)
+  double amplitude = 0;  // fraction of its rest length a spring's target length moves (0 = passive)
+  double damping = 0;    // dashpot c_s, 1/s (SPEC §2.2; 0 = SPEC §6.2; connectors.damping)
 };
-// the paper reading's two connector kinds (SPEC §6.2; config keys connectors.weak_stiffness, strong_stiffness)
-inline constexpr Tether kWeakConnector{5e3};
-inline constexpr Tether kStrongConnector{3e4};
+
+// u, between a posterior's max x and its anterior's min x in a pair or a chain (SPEC §6.2, §7.4)
+inline constexpr double kAgentGap = 0.05;
 
 // a random valid agent with a freshly initialised controller
 Agent random_agent(Rng& rng, const sim::Constants& c = {});
@@ -48,7 +47,7 @@ sim::Scene agent_scene(const Agent& a, const std::string& env, sim::ContactLaw l
 // SPEC §6.1: anchors from the agent's own 1000-step run on flat ground, under the run's physics
 Anchors compute_anchors(const Agent& a, const sim::RunPhysics& physics, const sim::Constants& c = {}, int steps = 1000);
 
-// SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + 0.05)
+// SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + kAgentGap)
 // joined by one connector with the given springs; both agents need anchors
 sim::Scene pair_scene(const Agent& posterior, const Agent& anterior, const std::vector<double>& connector_params,
                       const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {});

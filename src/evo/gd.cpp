@@ -7,6 +7,7 @@
 #include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "evo/optim.hpp"
+#include "morph/body.hpp"
 
 namespace divcoll::evo {
 
@@ -27,7 +28,7 @@ const char* gd_rule_name(GdRule r) {
 }
 
 bool move_rest_positions(morph::Agent& a, const std::vector<double>& delta, const GdOptions& opt) {
-  const double lo = opt.rest_length_min * 0.05, hi = opt.rest_length_max * 0.05;
+  const double lo = opt.rest_length_min * morph::kSpacing, hi = opt.rest_length_max * morph::kSpacing;
   double scale = 1.0;
   for (int attempt = 0; attempt < 5; ++attempt, scale *= 0.5) {
     morph::Agent b = a;

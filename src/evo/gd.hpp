@@ -28,8 +28,8 @@ struct GdOptions {
   double adam_lr = 0.01;
   bool rest_moves = true;          // whether rest positions are trained
   double rest_move_max = 0.002;    // u, largest move of any mass per epoch
-  double rest_length_min = 0.5;    // × 0.05 u
-  double rest_length_max = 1.5;    // × 0.05 u
+  double rest_length_min = 0.5;    // × morph::kSpacing (0.05 u)
+  double rest_length_max = 1.5;    // × morph::kSpacing
 };
 
 struct TrainResult {

@@ -44,7 +44,7 @@ TEST(Behaviour, FramesAreCentredPositionsEveryKthStep) {
 TEST(Behaviour, PairSlotsAreTheTwoAgentsAndAloneMatchesItsOwnScene) {
   const morph::Agent a = testing::agent_with_anchors(5, 78), c = testing::agent_with_anchors(5, 79);
   const std::vector<double> w(sim::connector_param_count(), 0.0);
-  const sim::Scene s = collective::pair_scene(a, c, w, collective::kWeakConnector, "flat", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(a, c, w, testing::weak_connector(), "flat", testing::kCoulomb);
   sim::Simulator sim;
   sim::RunOptions opt;
   opt.steps = 40;

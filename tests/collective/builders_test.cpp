@@ -80,7 +80,7 @@ TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
 TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   const morph::Agent p = agent(1), a = agent(2);
   Rng rng = make_rng(1, 6, 0);
-  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), collective::kWeakConnector, "flat", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 2);
   EXPECT_EQ(s.n_connectors(), 1);
   EXPECT_NEAR(min_x_of(s, 1), max_x_of(s, 0) + 0.05, 1e-15);
@@ -90,7 +90,7 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
     EXPECT_GE(s.spring_j[sp], 11) << "spring j is on the anterior";
     EXPECT_TRUE(std::isfinite(s.rest_length[sp]));
     EXPECT_GT(s.rest_length[sp], 0.05);
-    EXPECT_EQ(s.stiffness[sp], collective::kWeakConnector.stiffness);
+    EXPECT_EQ(s.stiffness[sp], testing::weak_connector().stiffness);
     EXPECT_EQ(s.amplitude[sp], 0.6);
   }
   // spring order of SPEC §6.2
@@ -103,7 +103,7 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   double ymin = 1e9;
   for (int i = 0; i < s.n_masses(); ++i) ymin = std::min(ymin, s.x0[2 * i + 1]);
   EXPECT_EQ(ymin, 0.0);
-  const sim::Scene g = collective::pair_scene(p, a, s.connector_params, collective::kWeakConnector, "gap", testing::kCoulomb);
+  const sim::Scene g = collective::pair_scene(p, a, s.connector_params, testing::weak_connector(), "gap", testing::kCoulomb);
   EXPECT_NEAR(g.env.terrain[1].x_start, max_x_of(g, 1) + 0.05, 1e-15);
   // a tether of another stiffness and amplitude reaches the 5 connector springs and no agent spring
   const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25, 7.5}, "flat", testing::kCoulomb);
@@ -123,7 +123,7 @@ TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
   std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   Rng rng = make_rng(2, 6, 0);
-  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), collective::kWeakConnector, "flat", testing::kCoulomb);
+  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 7);
   EXPECT_EQ(s.n_connectors(), 6);
   for (int k = 1; k < 7; ++k) {
@@ -134,7 +134,7 @@ TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
     EXPECT_EQ(s.spring_j[sp] / 11, parent) << "connector " << k - 1 << " ends on the parent";
   }
   for (int k = 1; k < 7; ++k) EXPECT_LT(max_x_of(s, k), min_x_of(s, 0)) << "agent 0 is front-most";
-  EXPECT_THROW(collective::chain_scene({ptr[0]}, s.connector_params, collective::kWeakConnector, "flat", testing::kCoulomb), InputError);
+  EXPECT_THROW(collective::chain_scene({ptr[0]}, s.connector_params, testing::weak_connector(), "flat", testing::kCoulomb), InputError);
   // a chain's every connector spring gets the tether's dashpot, no agent spring does
   const sim::Scene d = collective::chain_scene(ptr, s.connector_params, collective::Tether{5e3, 0.6, 3.0}, "flat", testing::kCoulomb);
   for (int sp : d.connector_spring_index) EXPECT_EQ(d.damping[sp], 3.0);

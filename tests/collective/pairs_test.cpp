@@ -78,9 +78,9 @@ TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
   }
 }
 INSTANTIATE_TEST_SUITE_P(WeakAndStrong, PairLossGradient,
-                         ::testing::Values(std::pair{"flat", collective::kWeakConnector},
-                                           std::pair{"flat", collective::kStrongConnector},
-                                           std::pair{"ice", collective::kWeakConnector},
+                         ::testing::Values(std::pair{"flat", testing::weak_connector()},
+                                           std::pair{"flat", testing::strong_connector()},
+                                           std::pair{"ice", testing::weak_connector()},
                                            // connectors.amplitude other than the paper reading's 0.6
                                            std::pair{"flat", collective::Tether{5e3, 0.3}}),
                          [](const auto& info) {  // e.g. flat_k5000_a60 (amplitude in %)
@@ -97,14 +97,14 @@ TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot
   const std::vector<double> w = morph::init_connector_params(rng, 1.0), w2 = morph::init_connector_params(rng, 1.0);
   ASSERT_NE(w, w2);
   sim::Simulator sim;
-  const collective::Tether passive{collective::kWeakConnector.stiffness, 0.0};
+  const collective::Tether passive{testing::weak_connector().stiffness, 0.0};
   const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", testing::kSpec, 200, true);
   const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", testing::kSpec, 200, true);
   ASSERT_EQ(a.status, sim::Status::ok);
   EXPECT_EQ(a.travel_u, b.travel_u);
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
-  const auto c = collective::run_pair(sim, agents[0], agents[1], w, collective::kWeakConnector, "flat", testing::kSpec, 200, true);
-  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, collective::kWeakConnector, "flat", testing::kSpec, 200, true);
+  const auto c = collective::run_pair(sim, agents[0], agents[1], w, testing::weak_connector(), "flat", testing::kSpec, 200, true);
+  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, testing::weak_connector(), "flat", testing::kSpec, 200, true);
   EXPECT_NE(c.travel_u, d.travel_u);
   double gn = 0;
   for (double g : c.grad) gn += g * g;
@@ -191,7 +191,7 @@ TEST(Chains, TravelInBodyLengthsIsTravelOverTheMeanBodyLength) {
   Rng wrng = make_rng(6, 1, 0);
   const auto w = morph::init_connector_params(wrng, 0.1);
   sim::Simulator sim;
-  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, collective::kWeakConnector, "flat", testing::kSpec, 300);
+  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, testing::weak_connector(), "flat", testing::kSpec, 300);
   ASSERT_EQ(o.status, sim::Status::ok);
   EXPECT_DOUBLE_EQ(o.travel_bl, o.travel_u / bl);
   EXPECT_NE(o.travel_u, 0.0);

@@ -22,7 +22,7 @@ constexpr int kSteps = 300;
 // the pair of the gradient tests in `env` under `law`, its features just ahead of its front
 sim::Scene pair_in(const std::string& env, sim::ContactLaw law) {
   const testing::GradientPair& f = testing::gradient_pair();
-  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env, law);
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, law);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
   s.env = io::place_environment(io::environment_table(env), mx - 0.047, law);
@@ -112,8 +112,8 @@ TEST(NoSlip, ScenesCarryTheLawTheyAreGiven) {
       SCOPED_TRACE(sim::contact_law_name(law));
       EXPECT_EQ(io::place_environment(io::environment_table("ice"), 0.3, law).contact, law);
       EXPECT_EQ(collective::agent_scene(f.p, "sand", law).env.contact, law);
-      EXPECT_EQ(collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat", law).env.contact, law);
-      EXPECT_EQ(collective::chain_scene(chain, f.conn, collective::kWeakConnector, "ice", law).env.contact, law);
+      EXPECT_EQ(collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat", law).env.contact, law);
+      EXPECT_EQ(collective::chain_scene(chain, f.conn, testing::weak_connector(), "ice", law).env.contact, law);
     }
 }
 
@@ -122,9 +122,9 @@ TEST(NoSlip, ScenesCarryTheLawTheyAreGiven) {
 // alternate in one simulator (and the collective runners, given the law, run the same episodes)
 TEST(NoSlip, TheLawASceneIsBuiltWithReachesTheEngine) {
   const testing::GradientPair& f = testing::gradient_pair();
-  const sim::Scene coulomb = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+  const sim::Scene coulomb = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                     sim::ContactLaw::coulomb);
-  const sim::Scene no_slip = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+  const sim::Scene no_slip = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                     sim::ContactLaw::no_slip);
   sim::Scene by_hand = coulomb;
   by_hand.env.contact = sim::ContactLaw::no_slip;
@@ -144,9 +144,9 @@ TEST(NoSlip, TheLawASceneIsBuiltWithReachesTheEngine) {
 
   // the runners: a pair's and an agent's episodes under RunPhysics{no_slip}, then {coulomb}
   const sim::RunPhysics ns{sim::ContactLaw::no_slip, false};
-  const collective::PairOutcome pn = collective::run_pair(sim, f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+  const collective::PairOutcome pn = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                           ns, 200, true);
-  const collective::PairOutcome pc = collective::run_pair(sim, f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+  const collective::PairOutcome pc = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                           testing::kSpec, 200, true);
   sim::RunOptions frozen = opt;
   frozen.agent_param_grad = false;

@@ -55,7 +55,7 @@ TEST(Engine, FreeFallMatchesClosedForm) {
 
 TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
   const morph::Agent a = make_agent(1), b = make_agent(2);
-  sim::Scene s = collective::pair_scene(a, b, make_conn(1), collective::kWeakConnector, "flat", testing::kCoulomb);
+  sim::Scene s = collective::pair_scene(a, b, make_conn(1), testing::weak_connector(), "flat", testing::kCoulomb);
   s.env.gravity = 0;
   s.env.damping = 0;
   s.env.terrain = {sim::Segment{-1e9, -50, 0}};  // the ground is far below
@@ -147,7 +147,7 @@ TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
     const morph::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
     std::vector<double> conn = make_conn(seed);
     for (double& w : conn) w *= 3.0;  // vigorous actuation
-    sim::Scene s = collective::pair_scene(a, b, conn, collective::kWeakConnector, GetParam(), testing::kCoulomb);
+    sim::Scene s = collective::pair_scene(a, b, conn, testing::weak_connector(), GetParam(), testing::kCoulomb);
     double mx = -1e9;
     for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
     s.env = io::place_environment(io::environment_table(GetParam()), mx - 0.047, testing::kCoulomb);
@@ -181,7 +181,7 @@ INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(io
 
 TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
   const morph::Agent a = make_agent(4), b = make_agent(5);
-  const sim::Scene s = collective::pair_scene(a, b, make_conn(4), collective::kWeakConnector, "gap", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(4), testing::weak_connector(), "gap", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 300;
   opt.record = true;
@@ -194,7 +194,7 @@ TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
 
 TEST(Engine, StrongConnectorPairIsSubsteppedAndFinite) {
   const morph::Agent a = make_agent(6), b = make_agent(7);
-  const sim::Scene s = collective::pair_scene(a, b, make_conn(6), collective::kStrongConnector, "flat", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(6), testing::strong_connector(), "flat", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 1000;
   opt.grad = true;
@@ -239,7 +239,7 @@ TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
   std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   for (const std::string& env : io::environment_names()) {
-    const sim::Scene s = collective::chain_scene(ptr, make_conn(9), collective::kWeakConnector, env, testing::kCoulomb);
+    const sim::Scene s = collective::chain_scene(ptr, make_conn(9), testing::weak_connector(), env, testing::kCoulomb);
     sim::RunOptions opt;
     opt.steps = 500;
     const sim::RunResult r = sim::simulate(s, opt);
@@ -288,9 +288,9 @@ TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
   const morph::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
   const std::vector<double> conn = make_conn(30);
   std::vector<sim::Scene> batch = {
-      collective::pair_scene(a, b, conn, collective::kWeakConnector, "flat", testing::kCoulomb),
-      collective::pair_scene(b, c, conn, collective::kWeakConnector, "flat", testing::kCoulomb),
-      collective::pair_scene(c, a, conn, collective::kWeakConnector, "flat", testing::kCoulomb),
+      collective::pair_scene(a, b, conn, testing::weak_connector(), "flat", testing::kCoulomb),
+      collective::pair_scene(b, c, conn, testing::weak_connector(), "flat", testing::kCoulomb),
+      collective::pair_scene(c, a, conn, testing::weak_connector(), "flat", testing::kCoulomb),
   };
   batch[1].agent_params[100] = std::nan("");
   sim::RunOptions opt;
@@ -316,7 +316,7 @@ TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
 // touch flags are 0 and every spring is at its rest length (ℓ/L = 1 up to ε)
 TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
   const testing::GradientPair& f = testing::gradient_pair();
-  const sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 60;
   opt.record_hidden = true;
@@ -346,7 +346,7 @@ TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
 TEST(Engine, BatchOfDifferentShapesIsRefused) {
   const morph::Agent a = make_agent(40), b = make_agent(41);
   std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat", testing::kCoulomb),
-                                   collective::pair_scene(a, b, make_conn(40), collective::kWeakConnector, "flat", testing::kCoulomb)};
+                                   collective::pair_scene(a, b, make_conn(40), testing::weak_connector(), "flat", testing::kCoulomb)};
   sim::Simulator sim;
   EXPECT_THROW(sim.run_batch(batch, sim::RunOptions{}), InputError);
 }

@@ -28,7 +28,7 @@ std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_di
 
 sim::Scene pair_in(const std::string& env) {
   const testing::GradientPair& f = testing::gradient_pair();
-  return collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env, testing::kCoulomb);
+  return collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, testing::kCoulomb);
 }
 
 sim::RunResult run(const sim::Scene& s, bool grad, bool fl, int steps = kSteps) {
@@ -133,9 +133,9 @@ TEST(FloatNetworksDeterminism, ThePrecisionGivenReachesTheEngine) {
   ASSERT_NE(r.travel, d.travel) << "float and double agree to the bit: the test cannot tell them apart";
   sim::Simulator sim;
   for (int round = 0; round < 2; ++round) {
-    const collective::PairOutcome pf = collective::run_pair(sim, f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+    const collective::PairOutcome pf = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                             fl, 200, true);
-    const collective::PairOutcome pd = collective::run_pair(sim, f.p, f.a, f.conn, collective::kWeakConnector, "flat",
+    const collective::PairOutcome pd = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
                                                             testing::kSpec, 200, true);
     EXPECT_EQ(pf.travel_u, r.travel);
     EXPECT_EQ(pf.grad, r.grad_connector_params);

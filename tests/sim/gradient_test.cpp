@@ -27,7 +27,7 @@ std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_di
 // hit early
 sim::Scene pair_in(const std::string& env, double back = 0.047) {
   const testing::GradientPair& f = testing::gradient_pair();
-  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env, testing::kCoulomb);
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, testing::kCoulomb);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
   s.env = io::place_environment(io::environment_table(env), mx - back, testing::kCoulomb);

@@ -35,7 +35,7 @@ StageState make_state(uint64_t seed) {
   Vec conn = morph::init_connector_params(rng);
   for (double& w : conn) w += 0.05 * normal(rng);  // nonzero biases: every term matters
   StageState s;
-  s.scene = collective::pair_scene(p, a, conn, collective::kWeakConnector, "flat", testing::kCoulomb);
+  s.scene = collective::pair_scene(p, a, conn, testing::weak_connector(), "flat", testing::kCoulomb);
   for (double& c : s.scene.damping) c = 5.0 + uniform01(rng);
   s.scene.env.wind_amp = 1.5;
   s.scene.env.adhesion = 2.0;
