@@ -1,13 +1,15 @@
 // A/B driver for the engine (README "Engine speed-up"): the same fixed work through one build's engine,
 // timed by the thread's CPU time, so that two builds can be compared on a busy machine. Not built by CMake.
 //   today's tree (one library per layer):
-//   g++ -std=c++20 -O3 -march=native -ffp-contract=off -DHAS_AGRAD -I TREE/src -I TREE jobs/engine_ab_driver.cpp
+//   g++ -std=c++20 -O3 -march=native -ffp-contract=off -DHAS_AGRAD -DHAS_PHYSICS -I TREE/src -I TREE jobs/engine_ab_driver.cpp
 //       TREE/build/libdivcoll_science.a TREE/build/libdivcoll_config.a TREE/build/libdivcoll_engine.a -o ab
 //       -ltomlplusplus -lpagmo
 //   dea5a14 (one libdivcoll_core.a, no RunOptions::agent_param_grad): the same without -DHAS_AGRAD, linking
 //       TREE/build/libdivcoll_core.a -ltomlplusplus -lboost_serialization
 //   with -DHAS_FLOAT (0981201 and later) DIVCOLL_AB_FLOAT=1 in the environment runs the networks in float: a
 //   two-line script `DIVCOLL_AB_FLOAT=1 exec ./ab "$@"` is then the float side of jobs/engine_ab.py's pair.
+//   -DHAS_PHYSICS: trees whose builders take the contact law and compute_anchors the run's physics
+//   (sim::RunPhysics) explicitly; leave it out for trees with the process-wide law (before it)
 //   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20) prints scene-steps per CPU
 //   second, CPU seconds and a checksum (equal checksums: the same bits). jobs/engine_ab.py runs two in turn.
 #include <cstdio>
@@ -19,22 +21,30 @@
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
 using namespace divcoll;
+#ifdef HAS_PHYSICS
+#define AB_LAW sim::ContactLaw::coulomb,
+#define AB_PHYSICS sim::RunPhysics{},
+#else
+#define AB_LAW
+#define AB_PHYSICS
+#endif
 int main(int argc, char** argv) {
   const std::string kind = argv[1];
   const int batch = atoi(argv[2]), steps = atoi(argv[3]), grad = atoi(argv[4]), agrad = atoi(argv[5]), reps = atoi(argv[6]);
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   Rng rng(seed_for(7, 99, 0));
   for (int q = 0; q < 24; ++q) {
     agents.push_back(collective::random_agent(rng));
-    agents.back().anchors = collective::compute_anchors(agents.back(), {}, 300);
+    agents.back().anchors = collective::compute_anchors(agents.back(), AB_PHYSICS {}, 300);
   }
   auto conn = morph::init_connector_params(rng);
+  const collective::Tether weak{5e3, 0.6};  // the default config's weak connector
   std::vector<sim::Scene> scenes;
   for (int b = 0; b < batch; ++b) {
-    if (kind == "agent") scenes.push_back(collective::agent_scene(agents[b % 24], "flat", {}));
-    else if (kind == "pair") scenes.push_back(collective::pair_scene(agents[b % 24], agents[(b + 1) % 24], conn, collective::kWeakConnector, "flat", {}));
-    else { std::vector<const collective::Agent*> ch; for (int q = 0; q < 20; ++q) ch.push_back(&agents[(b + q) % 24]);
-      scenes.push_back(collective::chain_scene(ch, conn, collective::kWeakConnector, "flat", {})); }
+    if (kind == "agent") scenes.push_back(collective::agent_scene(agents[b % 24], "flat", AB_LAW {}));
+    else if (kind == "pair") scenes.push_back(collective::pair_scene(agents[b % 24], agents[(b + 1) % 24], conn, weak, "flat", AB_LAW {}));
+    else { std::vector<const morph::Agent*> ch; for (int q = 0; q < 20; ++q) ch.push_back(&agents[(b + q) % 24]);
+      scenes.push_back(collective::chain_scene(ch, conn, weak, "flat", AB_LAW {})); }
   }
   sim::Simulator sim;
   sim::RunOptions opt; opt.steps = steps; opt.grad = grad;

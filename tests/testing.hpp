@@ -13,9 +13,21 @@
 #include <vector>
 
 #include "collective/builders.hpp"
+#include "collective/deploy_variants.hpp"
+#include "config/config.hpp"
 #include "morph/body.hpp"
+#include "sim/engine.hpp"
 
 namespace divcoll::testing {
+// the spec's physics, Coulomb contact and the networks in double: what the tests build and run unless they say
+// otherwise (nothing in the process holds a run's physics: every scene and episode is given it)
+inline constexpr sim::RunPhysics kSpec{};
+inline constexpr sim::ContactLaw kCoulomb = sim::ContactLaw::coulomb;
+// the weak and the strong connector of the default config (connectors.weak_stiffness, strong_stiffness,
+// amplitude, damping: the schema is their one home)
+inline collective::Tether weak_connector() { return collective::strength_tether(io::default_config(), "weak"); }
+inline collective::Tether strong_connector() { return collective::strength_tether(io::default_config(), "strong"); }
+
 // the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
 // else the CMake cache variable of the same name (default: ../shared beside the checkout)
 inline std::string shared_dir() {
@@ -47,17 +59,17 @@ inline std::string doc(const std::string& path) {
 }
 inline std::string readme() { return doc("README.md"); }
 // a random agent from stream (seed, `stream`) with anchors from a short (300-step) run on flat
-inline collective::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
+inline morph::Agent agent_with_anchors(uint64_t seed, uint64_t stream) {
   Rng rng = make_rng(seed, stream, 0);
-  collective::Agent a = collective::random_agent(rng);
-  a.anchors = collective::compute_anchors(a, {}, 300);
+  morph::Agent a = collective::random_agent(rng);
+  a.anchors = collective::compute_anchors(a, kSpec, {}, 300);
   return a;
 }
 
 // the engine's gradient tests' pair (tests/sim/gradient_test.cpp, float_networks_test.cpp): two random agents with
 // anchors and connector weights with nonzero biases (so that every term matters), from stream (11, 1)
 struct GradientPair {
-  collective::Agent p, a;
+  morph::Agent p, a;
   std::vector<double> conn;
 };
 inline const GradientPair& gradient_pair() {
@@ -66,8 +78,8 @@ inline const GradientPair& gradient_pair() {
     Rng rng = make_rng(11, 1, 0);
     f.p = collective::random_agent(rng);
     f.a = collective::random_agent(rng);
-    f.p.anchors = collective::compute_anchors(f.p, {}, 300);
-    f.a.anchors = collective::compute_anchors(f.a, {}, 300);
+    f.p.anchors = collective::compute_anchors(f.p, kSpec, {}, 300);
+    f.a.anchors = collective::compute_anchors(f.a, kSpec, {}, 300);
     f.conn = morph::init_connector_params(rng);
     for (double& w : f.conn) w += 0.05 * normal(rng);
     return f;

@@ -31,8 +31,12 @@ double thread_cpu_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+// the benchmark times the spec's step: Coulomb contact (its scenes and the anchors' runs), the networks in double
+// unless a row says float
+constexpr sim::RunPhysics kSpecPhysics{};
+
 struct Fixture {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   std::vector<double> conn;
   collective::Tether tether;  // of the weak connector, from the config
 };
@@ -42,7 +46,7 @@ Fixture make_fixture(int n_agents, uint64_t seed) {
   Rng rng(seed_for(seed, 99, 0));
   for (int q = 0; q < n_agents; ++q) {
     f.agents.push_back(collective::random_agent(rng));
-    f.agents.back().anchors = collective::compute_anchors(f.agents.back(), {}, 300);
+    f.agents.back().anchors = collective::compute_anchors(f.agents.back(), kSpecPhysics, {}, 300);
   }
   f.conn = morph::init_connector_params(rng);
   return f;
@@ -51,12 +55,12 @@ Fixture make_fixture(int n_agents, uint64_t seed) {
 // scene b of a batch of the given kind: agents drawn round-robin from the fixture
 sim::Scene make_scene(const Fixture& f, const std::string& kind, int b, const sim::Constants& c = {}) {
   const int n = static_cast<int>(f.agents.size());
-  if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", c);
+  if (kind == "agent") return collective::agent_scene(f.agents[b % n], "flat", kSpecPhysics.contact, c);
   if (kind == "pair")
-    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.tether, "flat", c);
-  std::vector<const collective::Agent*> chain;
+    return collective::pair_scene(f.agents[b % n], f.agents[(b + 1) % n], f.conn, f.tether, "flat", kSpecPhysics.contact, c);
+  std::vector<const morph::Agent*> chain;
   for (int q = 0; q < 20; ++q) chain.push_back(&f.agents[(b + q) % n]);
-  return collective::chain_scene(chain, f.conn, f.tether, "flat", c);
+  return collective::chain_scene(chain, f.conn, f.tether, "flat", kSpecPhysics.contact, c);
 }
 
 // runs batches until `seconds` of the thread's CPU time have passed; returns scene-steps per CPU-second

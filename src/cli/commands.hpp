@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "collective/builders.hpp"
+#include "morph/agent.hpp"
 #include "config/config.hpp"
 
 namespace divcoll::cli {
@@ -106,7 +106,10 @@ int grad_diag(const GradDiagArgs& a);
 // a run file's config (with overrides) and final agents with their anchors (InputError if it has none)
 struct RunAgents {
   io::RunConfig cfg;
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
+  // how these commands run the run's episodes (the anchors' too): under its contact law (run.contact), the
+  // networks in double whatever run.precision says
+  sim::RunPhysics physics;
 };
 RunAgents load_run_agents(const std::string& run, const std::vector<std::string>& overrides);
 

@@ -39,7 +39,7 @@ int connector_opt(const ConnectorOptArgs& a) {
   }
   const RunAgents ra = load_run_agents(a.run, a.overrides);
   const io::RunConfig& cfg = ra.cfg;
-  const std::vector<collective::Agent>& agents = ra.agents;
+  const std::vector<morph::Agent>& agents = ra.agents;
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
   const collective::OptSettings os = collective::opt_settings(C);
@@ -66,8 +66,8 @@ int connector_opt(const ConnectorOptArgs& a) {
       const auto t0 = std::chrono::steady_clock::now();
       const uint64_t stream = 2000 + k * R + r;  // the connectors stage's slot stream
       Rng wr = make_rng(cfg.run.seed, stream, 1000000);
-      collective::PlainTrainSpec spec{stiff,           diverse,      C.iterations, C.batch_pairs, C.episode_steps,
-                                      C.validation_pairs, cfg.run.seed, stream};
+      collective::PlainTrainSpec spec{stiff,        ra.physics,      diverse,           C.iterations, C.batch_pairs,
+                                      C.episode_steps, C.validation_pairs, cfg.run.seed, stream};
       const collective::PlainTrainResult tr =
           collective::train_plain(sim, agents, os, morph::init_connector_params(wr, C.init_out_gain), spec);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -80,11 +80,11 @@ int connector_opt(const ConnectorOptArgs& a) {
       for (int T : eval_steps) {
         double alone = 0;
         for (const auto& [p, q] : eval)
-          alone += 0.5 * (collective::run_alone(sim, agents[p], "flat", T).travel_bl +
-                          collective::run_alone(sim, agents[q], "flat", T).travel_bl);
+          alone += 0.5 * (collective::run_alone(sim, agents[p], "flat", ra.physics, T).travel_bl +
+                          collective::run_alone(sim, agents[q], "flat", ra.physics, T).travel_bl);
         alone /= static_cast<double>(eval.size());
         for (const auto& [name, w] : which) {
-          const collective::ProbeResult pr = collective::run_probe(sim, agents, eval, *w, false, stiff, T, 0);
+          const collective::ProbeResult pr = collective::run_probe(sim, agents, eval, *w, false, stiff, ra.physics, T, 0);
           summary << a.label << ',' << kind << ',' << r << ',' << name << ',' << tr.best_iteration << ',' << T << ','
                   << pr.travel_bl << ',' << alone << ',' << pr.not_ok << ',' << tr.pair_episodes_grad << ','
                   << tr.pair_episodes_fwd << ',' << secs << '\n';

@@ -48,8 +48,9 @@ int export_scene(const ExportArgs& a) {
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
                        a.run << " is not a divcoll run file");
   const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
-  io::use_run_physics(cfg);  // the episode's scene under the run's contact law (written into the scene file)
-  std::vector<collective::Agent> agents;
+  // the episode's scene under the run's contact law (written into the scene file)
+  const sim::ContactLaw law = io::run_physics(cfg).contact;
+  std::vector<morph::Agent> agents;
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
   // pairs and chains need the anchors the connectors stage stored (the ones every stage used)
   auto with_anchors = [&] {
@@ -70,7 +71,8 @@ int export_scene(const ExportArgs& a) {
     steps = cfg.deploy.episode_steps;
     if (a.what == "alone") {
       check_range("--agent", a.agent, pop);
-      s = collective::agent_scene(agents[a.agent], a.env, {}, collective::alone_feature_offset(cfg, agents[a.agent]));
+      s = collective::agent_scene(agents[a.agent], a.env, law, {},
+                                  collective::alone_feature_offset(cfg, agents[a.agent]));
       idx = {e, a.agent};
       what = "agent " + std::to_string(a.agent) + " alone";
     } else {
@@ -85,7 +87,7 @@ int export_scene(const ExportArgs& a) {
       with_anchors();
       const collective::Tether k = collective::tether(cfg, kind);
       s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,
-                                 a.env);
+                                 a.env, law);
       idx = {e, t, a.replicate, a.pair};
       what = a.type + " replicate " + std::to_string(a.replicate) + ", pair " + std::to_string(a.pair) + " (agents " +
              std::to_string(p) + " behind " + std::to_string(q) + ")";
@@ -100,7 +102,7 @@ int export_scene(const ExportArgs& a) {
     const int p = dp[2 * a.pair], q = dp[2 * a.pair + 1];
     with_anchors();
     s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "specialists/" + a.env, a.replicate),
-                               collective::tether(cfg, "weak_diverse"), a.env);
+                               collective::tether(cfg, "weak_diverse"), a.env, law);
     idx = {e, a.replicate, a.pair};
     steps = cfg.deploy.episode_steps;
     stage = "specialists";
@@ -125,10 +127,10 @@ int export_scene(const ExportArgs& a) {
       members.assign(all.begin() + row * a.size, all.begin() + (row + 1) * a.size);
     }
     with_anchors();
-    std::vector<const collective::Agent*> ptr;
+    std::vector<const morph::Agent*> ptr;
     for (int32_t m : members) ptr.push_back(&agents[m]);
     s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
-                                collective::tether(cfg, v ? "weak_diverse" : "weak_uniform"), a.env);
+                                collective::tether(cfg, v ? "weak_diverse" : "weak_uniform"), a.env, law);
     idx = {e, si, v, a.replicate, a.draw};
     steps = cfg.scaling.episode_steps;
     stage = "scaling";

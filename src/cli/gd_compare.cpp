@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "collective/builders.hpp"
 #include "evo/gd.hpp"
 
 namespace divcoll::cli {
@@ -35,8 +36,8 @@ int gd_compare(const GdCompareArgs& a) {
     double drop_sum = 0, drop_max = 0;
     for (int i = 0; i < a.agents; ++i) {
       Rng rng = make_rng(a.seed, 77, i);
-      collective::Agent ag = collective::random_agent(rng);
-      const evo::TrainResult r = evo::train_agent(ag, opt, sim);
+      morph::Agent ag = collective::random_agent(rng);
+      const evo::TrainResult r = evo::train_agent(ag, opt, sim::RunPhysics{}, sim);  // the spec's: coulomb, double
       fit.push_back(r.fitness_bl);
       // how far below the best evaluation the curve ended (the noise of the rule)
       double best = -1e300;

@@ -62,17 +62,17 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("agents/final"), run << " has no final agent population (run the agents stage)");
-  RunAgents ra{io::apply_overrides(io::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}};
-  io::use_run_physics(ra.cfg);  // the run's scenes under the run's contact law
+  RunAgents ra{io::apply_overrides(io::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}, {}};
+  ra.physics.contact = io::run_physics(ra.cfg).contact;  // the run's scenes under the run's contact law
   for (const auto& x : io::read_final_population(f)) ra.agents.push_back(x.agent);
-  for (auto& ag : ra.agents) ag.anchors = collective::compute_anchors(ag);
+  for (auto& ag : ra.agents) ag.anchors = collective::compute_anchors(ag, ra.physics);
   return ra;
 }
 
 int grad_diag(const GradDiagArgs& a) {
   const RunAgents ra = load_run_agents(a.run, a.overrides);
   const io::RunConfig& cfg = ra.cfg;
-  const std::vector<collective::Agent>& agents = ra.agents;
+  const std::vector<morph::Agent>& agents = ra.agents;
   const auto kinds = io::connector_kind_names();
   int kind = -1;
   for (size_t k = 0; k < kinds.size(); ++k)
@@ -102,7 +102,8 @@ int grad_diag(const GradDiagArgs& a) {
   sim::Simulator sim;
   if (a.train_iterations > 0) {
     // first train with the run's (or the overridden) connector settings, as the stage would
-    collective::PlainTrainSpec ts{k, diverse, a.train_iterations, a.pairs, C.episode_steps, 0, cfg.run.seed, stream};
+    collective::PlainTrainSpec ts{k, ra.physics, diverse, a.train_iterations, a.pairs, C.episode_steps, 0, cfg.run.seed,
+                                  stream};
     const auto tr = collective::train_plain(sim, agents, collective::opt_settings(C), theta, ts);
     theta = tr.params;
     std::printf("trained %d iterations (%s, lr %g): batch travel %.3f -> %.3f BL\n\n", a.train_iterations,
@@ -117,11 +118,11 @@ int grad_diag(const GradDiagArgs& a) {
               "J(θ+hĝ) − J(θ) of a step of length h along the gradient (u; > 0 = uphill).\n\n");
 
   auto J = [&](const std::vector<double>& w, int steps) {
-    return collective::run_probe(sim, agents, batch, w, false, k, steps, 0).travel_u;
+    return collective::run_probe(sim, agents, batch, w, false, k, ra.physics, steps, 0).travel_u;
   };
   for (int T : horizons) {
     // per-pair gradients: their norms and the agreement of the batch's two halves
-    sim::RunOptions opt;
+    sim::RunOptions opt = ra.physics.options();
     opt.steps = T;
     opt.grad = true;
     opt.agent_param_grad = false;
@@ -129,7 +130,7 @@ int grad_diag(const GradDiagArgs& a) {
     std::vector<double> pair_norms;
     for (size_t p = 0; p < batch.size(); ++p) {
       const collective::PairOutcome o =
-          collective::run_pair(sim, agents[batch[p].first], agents[batch[p].second], theta, k, "flat", opt, nullptr);
+          collective::run_pair(sim, agents[batch[p].first], agents[batch[p].second], theta, k, "flat", ra.physics.contact, opt, nullptr);
       all.add(o);
       (2 * p < batch.size() ? h1 : h2).add(o);
       if (o.status == sim::Status::ok) pair_norms.push_back(norm(o.grad));
@@ -144,7 +145,7 @@ int grad_diag(const GradDiagArgs& a) {
     std::printf("|g| = %.4g; per-pair |g|: median %.4g, max %.4g; cos(g of first half, g of second half) = %.3f\n",
                 gn, pair_norms[pair_norms.size() / 2], pair_norms.back(), cosine(h1.mean().grad, h2.mean().grad));
     if (a.window > 0 && a.window < T) {
-      const auto tr = collective::run_probe(sim, agents, batch, theta, true, k, T, a.window);
+      const auto tr = collective::run_probe(sim, agents, batch, theta, true, k, ra.physics, T, a.window);
       std::printf("truncated backpropagation, window %d: |g_W| = %.4g, cos(g_W, g) = %.3f\n", a.window, norm(tr.grad),
                   cosine(tr.grad, g));
     }

@@ -182,8 +182,9 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
   MPI_Comm_free(&node);
   mpi::agree_rank0(comm, [&] {
     Rng rng = make_rng(cfg.run.seed, 0, 0);
-    collective::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
-    sim::RunOptions opt;
+    morph::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
+    const sim::RunPhysics physics = io::run_physics(cfg);
+    sim::RunOptions opt = physics.options();
     opt.grad = true;
     uint64_t need = 0;
     std::string what;
@@ -194,17 +195,17 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
     };
     const bool run = !args.agents_only;
     if (args.agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
-      consider(collective::agent_scene(a, "flat"), cfg.agents.episode_steps, "agents.episode_steps");
+      consider(collective::agent_scene(a, "flat", physics.contact), cfg.agents.episode_steps, "agents.episode_steps");
     if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
-      a.anchors = collective::compute_anchors(a);
-      b.anchors = collective::compute_anchors(b);
+      a.anchors = collective::compute_anchors(a, physics);
+      b.anchors = collective::compute_anchors(b, physics);
       const std::vector<double> w = morph::init_connector_params(rng);
       double k = cfg.connectors.weak_stiffness;
       for (const std::string& kind : cfg.connectors.kinds)
         if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
       std::vector<std::string> envs = {"flat"};
       if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
-      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env), cfg.connectors.episode_steps, "connectors.episode_steps");
+      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env, physics.contact), cfg.connectors.episode_steps, "connectors.episode_steps");
     }
     const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
     if (need > limit)
@@ -322,9 +323,6 @@ struct Prepared {
 // the stop signals, takes the run file's lock and, with --from, makes the run file from the base's earlier stages
 void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
   mpi::agree_all(MPI_COMM_WORLD, [&] { check_request(args, p.cfg, p.path); });
-  // every episode of this run in the run's precision (a study runs several configs in one process)
-  sim::set_default_float_networks(p.cfg.run.precision == "float_networks");
-  io::use_run_physics(p.cfg);  // and under its contact law
   make_output_folder(p.path);
   // a stop asked for by a signal takes effect right after a checkpoint, on every rank at once. Armed before
   // the lock is taken, so a job script that sees the lock file knows the ranks will act on SIGUSR1

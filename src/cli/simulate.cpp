@@ -103,26 +103,27 @@ int scene(const SceneArgs& a) {
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
   const io::RunConfig cfg = a.config.empty() ? io::default_config() : io::load_config(a.config);
   const collective::Tether k = collective::strength_tether(cfg, a.connector);
-  io::use_run_physics(cfg);  // the config's contact law (run.contact)
+  // the config's contact law (run.contact) for the scene and the anchors' runs; the networks in double
+  const sim::RunPhysics physics{io::run_physics(cfg).contact, false};
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
   // agents are random until the agents stage provides trained ones
   Rng rng(seed_for(a.seed, 0, 0));
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < (a.uniform ? 1 : n); ++q) {
     agents.push_back(collective::random_agent(rng));
-    if (n > 1) agents.back().anchors = collective::compute_anchors(agents.back());
+    if (n > 1) agents.back().anchors = collective::compute_anchors(agents.back(), physics);
   }
   const std::vector<double> conn = morph::init_connector_params(rng);
   sim::Scene s;
   if (a.kind == "agent") {
-    s = collective::agent_scene(agents[0], a.env);
+    s = collective::agent_scene(agents[0], a.env, physics.contact);
   } else {
-    std::vector<const collective::Agent*> ptr;
+    std::vector<const morph::Agent*> ptr;
     for (int q = 0; q < n; ++q) ptr.push_back(&agents[a.uniform ? 0 : q]);
-    s = a.kind == "pair" ? collective::pair_scene(*ptr[0], *ptr[1], conn, k, a.env)
-                         : collective::chain_scene(ptr, conn, k, a.env);
+    s = a.kind == "pair" ? collective::pair_scene(*ptr[0], *ptr[1], conn, k, a.env, physics.contact)
+                         : collective::chain_scene(ptr, conn, k, a.env, physics.contact);
   }
   io::write_scene(a.out, s, a.force);
   std::printf("%s: %s of %d agent(s) in %s, %d masses, %d springs, %d connector(s), %d substep(s)\n",
@@ -219,15 +220,18 @@ int demo(const DemoArgs& a) {
     for (const auto& row : rows) std::printf("%s", row.c_str());
   } else {
     Rng rng(seed_for(a.seed, 0, 0));
-    collective::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
-    P.anchors = collective::compute_anchors(P);
-    A.anchors = collective::compute_anchors(A);
+    // the spec's physics (coulomb, double): the demo has no config
+    const sim::RunPhysics physics{};
+    morph::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
+    P.anchors = collective::compute_anchors(P, physics);
+    A.anchors = collective::compute_anchors(A, physics);
     const std::vector<double> conn = morph::init_connector_params(rng);
     std::printf("demo: two random, untrained agents joined by an untrained weak connector (they barely move; "
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config(), "weak"), env);
+      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config(), "weak"), env,
+                                                  physics.contact);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
       sim::RunOptions opt;

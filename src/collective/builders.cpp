@@ -48,7 +48,7 @@ void append_agent(sim::Scene& s, const Agent& a, double x_left) {
     s.rest_length.push_back(a.rest_length[r]);
     s.stiffness.push_back(morph::kAgentStiffness);
     s.amplitude.push_back(a.amplitude[r]);
-    s.damping.push_back(0.0);
+    s.damping.push_back(morph::kAgentDashpot);
   }
   s.agent_params.insert(s.agent_params.end(), a.params.begin(), a.params.end());
 }
@@ -77,24 +77,13 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
   }
 }
 
-void place_env(sim::Scene& s, const std::string& env, double feature_offset = 0) {
+void place_env(sim::Scene& s, const std::string& env, sim::ContactLaw law, double feature_offset = 0) {
   double mx = s.x0[0];
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset);
+  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset, law);
 }
 
 }  // namespace
-
-double body_length(const Agent& a) { return max_x(a) - min_x(a); }
-
-void update_rest_lengths(Agent& a) {
-  a.rest_length.resize(a.spring_i.size());
-  for (size_t r = 0; r < a.spring_i.size(); ++r) {
-    // the same expression as morph::agent_geometry, so that a recomputed length equals the original bits
-    const int i = a.spring_i[r], j = a.spring_j[r];
-    a.rest_length[r] = std::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
-  }
-}
 
 Agent random_agent(Rng& rng, const sim::Constants& c) {
   const uint32_t cells = morph::random_body(rng);
@@ -103,30 +92,23 @@ Agent random_agent(Rng& rng, const sim::Constants& c) {
 }
 
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c) {
-  Agent a;
-  a.cells = cells;
-  a.springs = springs;
-  const morph::AgentGeometry g = morph::agent_geometry(a.cells, a.springs);
-  a.rest_pos = g.rest_pos;
-  a.spring_i = g.spring_i;
-  a.spring_j = g.spring_j;
-  a.rest_length = g.rest_length;
-  a.amplitude = g.amplitude;
+  Agent a = morph::agent_geometry(cells, springs);
   a.params = morph::init_agent_params(rng, sim::agent_input_size(c));
   return a;
 }
 
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c, double feature_offset) {
+sim::Scene agent_scene(const Agent& a, const std::string& env, sim::ContactLaw law, const sim::Constants& c,
+                       double feature_offset) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, a, 0.0);
-  place_env(s, env, feature_offset);
+  place_env(s, env, law, feature_offset);
   return s;
 }
 
-Anchors compute_anchors(const Agent& a, const sim::Constants& c, int steps) {
-  const sim::Scene s = agent_scene(a, "flat", c);
-  sim::RunOptions opt;
+Anchors compute_anchors(const Agent& a, const sim::RunPhysics& physics, const sim::Constants& c, int steps) {
+  const sim::Scene s = agent_scene(a, "flat", physics.contact, c);
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
   opt.record = true;
   const sim::RunResult r = sim::simulate(s, opt);
@@ -199,27 +181,27 @@ Anchors compute_anchors(const Agent& a, const sim::Constants& c, int steps) {
 }
 
 sim::Scene pair_scene(const Agent& P, const Agent& A, const std::vector<double>& conn, const Tether& tether,
-                      const std::string& env, const sim::Constants& c) {
+                      const std::string& env, sim::ContactLaw law, const sim::Constants& c) {
   sim::Scene s;
   s.constants = c;
   append_agent(s, P, 0.0);
-  append_agent(s, A, (max_x(P) - min_x(P)) + 0.05);
+  append_agent(s, A, (max_x(P) - min_x(P)) + kAgentGap);
   append_connector(s, 0, 1, P.anchors, A.anchors, tether);
   s.connector_params = conn;
-  place_env(s, env);
+  place_env(s, env, law);
   return s;
 }
 
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& conn,
-                       const Tether& tether, const std::string& env, const sim::Constants& c) {
+                       const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c) {
   const int n = static_cast<int>(agents.size());
   DIVCOLL_THROW_UNLESS(n >= 2, "a chain needs at least 2 agents (got " << n << ")");
-  // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − 0.05
+  // x of each agent's left edge: agent 0 at 0, child k right edge at its parent's left edge − kAgentGap
   std::vector<double> left(n, 0.0);
   for (int k = 1; k < n; ++k) {
     const int parent = (k - 1) / 2;
     const double width = max_x(*agents[k]) - min_x(*agents[k]);
-    left[k] = left[parent] - 0.05 - width;
+    left[k] = left[parent] - kAgentGap - width;
   }
   const double shift = -*std::min_element(left.begin(), left.end());
   sim::Scene s;
@@ -228,7 +210,7 @@ sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vecto
   for (int k = 1; k < n; ++k) append_connector(s, k, (k - 1) / 2, agents[k]->anchors, agents[(k - 1) / 2]->anchors,
                                                tether);
   s.connector_params = conn;
-  place_env(s, env);
+  place_env(s, env, law);
   return s;
 }
 

@@ -7,65 +7,54 @@
 #include <vector>
 
 #include "common/rng.hpp"
+#include "morph/agent.hpp"
+#include "sim/engine.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::collective {
 
-// the connector anchors of one agent (SPEC §6.1), as local mass indices 0..10
-struct Anchors {
-  int back_foot = -1, front_foot = -1, back_upper = -1, front_upper = -1;
-};
+// the agent type is morphology's (morph/agent.hpp); these names stay here for the stage plans under mpi/ that
+// still spell them collective:: (to be dropped once those files have moved to src/stages)
+using morph::Agent;
+using morph::Anchors;
+using morph::body_length;
 
-// one agent as data: genotype, geometry (rest positions with min x = min y = 0) and controller
-struct Agent {
-  uint32_t cells = 0;                  // body genotype (28 lattice cells)
-  uint32_t springs = 0;                // spring genotype (21 bits, 1 = active)
-  std::vector<double> rest_pos;        // (11 x 2) u
-  std::vector<int32_t> spring_i, spring_j;  // (21) local mass indices
-  std::vector<double> rest_length;     // (21) u
-  std::vector<double> amplitude;       // (21) 0.15 active, 0 passive
-  std::vector<double> params;          // (P_a) controller, SPEC §4.3
-  Anchors anchors;                     // filled by compute_anchors
-};
-
-// relative actuation amplitude of a connector's springs (SPEC §6.2; config key connectors.amplitude)
-inline constexpr double kConnectorAmplitude = 0.6;
-
-// the springs of one connector (SPEC §6.2): all 5 get this stiffness, amplitude and dashpot
+// the springs of one connector (SPEC §6.2): all 5 get this stiffness, amplitude and dashpot. A run's come from its
+// config (collective::tether, strength_tether: connectors.weak_stiffness or strong_stiffness, amplitude, damping),
+// whose schema (config/config.cpp) is the one home of their defaults, the paper reading's 5000 / 30000 and 0.6
 struct Tether {
-  double stiffness = 0;                    // force/u (per unit mass)
-  double amplitude = kConnectorAmplitude;  // fraction of its rest length a spring's target length moves (0 = passive)
-  double damping = 0;                      // dashpot c_s, 1/s (SPEC §2.2; 0 = SPEC §6.2; connectors.damping)
+  double stiffness = 0;  // force/u (per unit mass)
+  double amplitude = 0;  // fraction of its rest length a spring's target length moves (0 = passive)
+  double damping = 0;    // dashpot c_s, 1/s (SPEC §2.2; 0 = SPEC §6.2; connectors.damping)
 };
-// the paper reading's two connector kinds (SPEC §6.2; config keys connectors.weak_stiffness, strong_stiffness)
-inline constexpr Tether kWeakConnector{5e3};
-inline constexpr Tether kStrongConnector{3e4};
 
-// body length of an agent: max x − min x of its rest positions, u (SPEC §1)
-double body_length(const Agent& a);
+// u, between a posterior's max x and its anterior's min x in a pair or a chain (SPEC §6.2, §7.4)
+inline constexpr double kAgentGap = 0.05;
 
 // a random valid agent with a freshly initialised controller
 Agent random_agent(Rng& rng, const sim::Constants& c = {});
 // an agent of the given body and spring genotypes at its lattice positions, with a fresh controller
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c = {});
-// rebuilds rest_length from rest_pos (after the rest positions changed)
-void update_rest_lengths(Agent& a);
+
+// Every scene below is placed in a named built-in environment under the contact law `law` (the run's: sim::RunPhysics,
+// io::run_physics), which the scene then carries (sim::Environment::contact).
 
 // an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
 // feature_offset: the environment's features start this much further ahead (deploy.feature_placement)
-sim::Scene agent_scene(const Agent& a, const std::string& env, const sim::Constants& c = {}, double feature_offset = 0);
+sim::Scene agent_scene(const Agent& a, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {},
+                       double feature_offset = 0);
 
-// SPEC §6.1: anchors from the agent's own 1000-step run on flat ground
-Anchors compute_anchors(const Agent& a, const sim::Constants& c = {}, int steps = 1000);
+// SPEC §6.1: anchors from the agent's own 1000-step run on flat ground, under the run's physics
+Anchors compute_anchors(const Agent& a, const sim::RunPhysics& physics, const sim::Constants& c = {}, int steps = 1000);
 
-// SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + 0.05)
+// SPEC §6.2: posterior P (left, scene agent 0) and anterior A (right, scene agent 1, min x = P's max x + kAgentGap)
 // joined by one connector with the given springs; both agents need anchors
 sim::Scene pair_scene(const Agent& posterior, const Agent& anterior, const std::vector<double>& connector_params,
-                      const Tether& tether, const std::string& env, const sim::Constants& c = {});
+                      const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {});
 
 // SPEC §7.4: a chain of agents in binary-tree heap order: agent 0 is front-most, agents 2k+1 and 2k+2 hang
 // behind agent k (same x, overlapping); connector k−1 joins child k (posterior) to its parent (anterior)
 sim::Scene chain_scene(const std::vector<const Agent*>& agents, const std::vector<double>& connector_params,
-                       const Tether& tether, const std::string& env, const sim::Constants& c = {});
+                       const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::Constants& c = {});
 
 }  // namespace divcoll::collective

@@ -26,8 +26,8 @@ std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg) 
 
 double alone_feature_offset(const io::RunConfig& cfg, const Agent& a) {
   const std::string& f = cfg.deploy.feature_placement;
-  if (f == "pair_mean") return 0.5 * (body_length(a) + 0.05);
-  if (f == "rear") return body_length(a) + 0.05;
+  if (f == "pair_mean") return 0.5 * (body_length(a) + kAgentGap);
+  if (f == "rear") return body_length(a) + kAgentGap;
   return 0.0;
 }
 

@@ -23,7 +23,7 @@ Tether strength_tether(const io::RunConfig& cfg, std::string_view strength);
 std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg);
 
 // how much further ahead than a collective's the features of agent `a` deployed alone start
-// (deploy.feature_placement: front 0, pair_mean (w + 0.05)/2, rear w + 0.05, w = a's body length)
+// (deploy.feature_placement: front 0, pair_mean (w + kAgentGap)/2, rear w + kAgentGap, w = a's body length)
 double alone_feature_offset(const io::RunConfig& cfg, const Agent& a);
 
 // travel in u at `step` of a run of a scene of `masses` masses made with RunOptions::record, computed as the engine computes its final

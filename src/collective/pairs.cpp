@@ -26,17 +26,19 @@ std::vector<std::pair<int, int>> random_pairs(Rng& rng, int population, int n) {
 }
 
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
-                     const Tether& tether, const std::string& env, int steps, bool grad) {
-  sim::RunOptions opt;
+                     const Tether& tether, const std::string& env, const sim::RunPhysics& physics, int steps,
+                     bool grad) {
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
   opt.grad = grad;
   opt.agent_param_grad = false;  // only the connector gradient is returned: the agents stay frozen
-  return run_pair(sim, P, A, params, tether, env, opt, nullptr);
+  return run_pair(sim, P, A, params, tether, env, physics.contact, opt, nullptr);
 }
 
 PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const std::vector<double>& params,
-                     const Tether& tether, const std::string& env, const sim::RunOptions& opt, sim::RunResult* full) {
-  const sim::Scene s = pair_scene(P, A, params, tether, env);
+                     const Tether& tether, const std::string& env, sim::ContactLaw law, const sim::RunOptions& opt,
+                     sim::RunResult* full) {
+  const sim::Scene s = pair_scene(P, A, params, tether, env, law);
   sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;
@@ -49,9 +51,9 @@ PairOutcome run_pair(sim::Simulator& sim, const Agent& P, const Agent& A, const 
 }
 
 PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
-                      const Tether& tether, const std::string& env, int steps) {
-  const sim::Scene s = chain_scene(agents, params, tether, env);
-  sim::RunOptions opt;
+                      const Tether& tether, const std::string& env, const sim::RunPhysics& physics, int steps) {
+  const sim::Scene s = chain_scene(agents, params, tether, env, physics.contact);
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
   const sim::RunResult r = sim.run(s, opt);
   double bl = 0;
@@ -63,15 +65,16 @@ PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agen
   return o;
 }
 
-PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps) {
-  sim::RunOptions opt;
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunPhysics& physics,
+                      int steps) {
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
-  return run_alone(sim, a, env, opt, nullptr);
+  return run_alone(sim, a, env, physics.contact, opt, nullptr);
 }
 
-PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
-                      sim::RunResult* full, double feature_offset) {
-  const sim::Scene s = agent_scene(a, env, {}, feature_offset);
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, sim::ContactLaw law,
+                      const sim::RunOptions& opt, sim::RunResult* full, double feature_offset) {
+  const sim::Scene s = agent_scene(a, env, law, {}, feature_offset);
   sim::RunResult r = sim.run(s, opt);
   PairOutcome o;
   o.status = r.status;

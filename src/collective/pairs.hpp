@@ -25,25 +25,30 @@ struct PairOutcome {
   bool redone_in_double = false;  // float networks: their gradient overflowed, so the episode ran again in double
 };
 
+// Each episode runs under a run's physics: the overloads with a step count take it whole (sim::RunPhysics), those
+// with every option of the run take the contact law and find the precision in `opt` (RunOptions::float_networks;
+// RunPhysics::options() makes options in the run's precision).
+
 // one pair episode: `posterior` left, `anterior` right, joined by the connector `params`
 PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& anterior,
-                     const std::vector<double>& params, const Tether& tether, const std::string& env, int steps,
-                     bool grad);
+                     const std::vector<double>& params, const Tether& tether, const std::string& env,
+                     const sim::RunPhysics& physics, int steps, bool grad);
 
 // the same with every option of the run (e.g. record_hidden); `full` (if given) receives the whole result
 PairOutcome run_pair(sim::Simulator& sim, const Agent& posterior, const Agent& anterior,
                      const std::vector<double>& params, const Tether& tether, const std::string& env,
-                     const sim::RunOptions& opt, sim::RunResult* full);
+                     sim::ContactLaw law, const sim::RunOptions& opt, sim::RunResult* full);
 
 // a chain of agents in heap order (agent 0 front-most), one connector for all: travel of the whole chain's
 // centre of mass in u and in mean body lengths of its agents (no gradient)
 PairOutcome run_chain(sim::Simulator& sim, const std::vector<const Agent*>& agents, const std::vector<double>& params,
-                      const Tether& tether, const std::string& env, int steps);
+                      const Tether& tether, const std::string& env, const sim::RunPhysics& physics, int steps);
 
 // one agent alone: travel in u and BL
-PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, int steps);
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunPhysics& physics,
+                      int steps);
 // the same with every option of the run (e.g. record); `full` (if given) receives the whole result
-PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, const sim::RunOptions& opt,
-                      sim::RunResult* full, double feature_offset = 0);
+PairOutcome run_alone(sim::Simulator& sim, const Agent& a, const std::string& env, sim::ContactLaw law,
+                      const sim::RunOptions& opt, sim::RunResult* full, double feature_offset = 0);
 
 }  // namespace divcoll::collective

@@ -1057,11 +1057,14 @@ std::string schema_markdown() {
   return out;
 }
 
-void use_run_physics(const RunConfig& cfg) {
-  sim::ContactLaw law = sim::ContactLaw::coulomb;
-  DIVCOLL_THROW_UNLESS(sim::contact_law_from_name(cfg.run.contact, &law),
+sim::RunPhysics run_physics(const RunConfig& cfg) {
+  sim::RunPhysics p;
+  DIVCOLL_THROW_UNLESS(sim::contact_law_from_name(cfg.run.contact, &p.contact),
                        "run.contact = \"" << cfg.run.contact << "\" is not a contact law (coulomb, no_slip)");
-  set_contact_law(law);
+  DIVCOLL_THROW_UNLESS(cfg.run.precision == "double" || cfg.run.precision == "float_networks",
+                       "run.precision = \"" << cfg.run.precision << "\" is not a precision (double, float_networks)");
+  p.float_networks = cfg.run.precision == "float_networks";
+  return p;
 }
 
 }  // namespace divcoll::io

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "sim/engine.hpp"
+
 namespace divcoll::io {
 
 // every value of a run; get one from default_config() or parse_config(), never from a bare RunConfig{}
@@ -24,8 +26,8 @@ struct RunConfig {
     double progress_every_s{};  // seconds between progress lines (0 = none)
     double stop_grace_s{};      // after SIGTERM/SIGINT/SIGUSR1: longest wait for the next checkpoint
     double memory_limit_gb{};   // per node, for every rank's simulator tape together (0 = 80% of MemAvailable)
-    std::string precision;      // double | float_networks (the controllers' networks in float; sim::RunOptions)
-    std::string contact;        // coulomb | no_slip: the contact law of every environment (io::set_contact_law)
+    std::string precision;      // double | float_networks (the controllers' networks in float; run_physics)
+    std::string contact;        // coulomb | no_slip: the contact law of every environment (run_physics)
     bool operator==(const Run&) const = default;
   };
   struct Agents {
@@ -167,9 +169,10 @@ std::vector<std::string> config_keys();
 // a markdown table of every key: key, type, default, allowed, unit, meaning
 std::string schema_markdown();
 
-// makes the config's run-wide physics the process's: run.contact for every environment placed from now on
-// (io::set_contact_law). Call it before building any scene of the run, and before rebuilding one from a run
-// file's stored config.
-void use_run_physics(const RunConfig& cfg);
+// the config's run-wide physics (run.contact, run.precision), for whatever builds the run's scenes and episodes
+// (the stage plans, and the commands that rebuild a run's scenes from its stored config): the contact law goes
+// into every environment placed, the precision into every episode's sim::RunOptions. InputError on a name that
+// is not a law or a precision
+sim::RunPhysics run_physics(const RunConfig& cfg);
 
 }  // namespace divcoll::io

@@ -1,7 +1,6 @@
 #include "config/environments.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -66,13 +65,7 @@ void read_table(const toml::table& t, const std::string& where, sim::Environment
   }
 }
 
-// the contact law place_environment stamps on every environment (set_contact_law)
-std::atomic<sim::ContactLaw> g_contact_law{sim::ContactLaw::coulomb};
-
 }  // namespace
-
-void set_contact_law(sim::ContactLaw law) { g_contact_law = law; }
-sim::ContactLaw contact_law() { return g_contact_law; }
 
 std::vector<EnvironmentTable> parse_environments(const std::string& text, const std::string& origin) {
   toml::table root;
@@ -136,9 +129,9 @@ const EnvironmentTable& environment_table(const std::string& name) {
   throw InputError(msg() << "unknown environment '" << name << "' (known: " << known << ")");
 }
 
-sim::Environment place_environment(const EnvironmentTable& table, double max_x0) {
+sim::Environment place_environment(const EnvironmentTable& table, double max_x0, sim::ContactLaw law) {
   sim::Environment env = table.physics;
-  env.contact = contact_law();
+  env.contact = law;
   const double xf = max_x0 + 0.05;
   env.terrain.clear();
   env.terrain.push_back(sim::Segment{-1e9, 0.0, 0.0});

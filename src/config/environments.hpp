@@ -33,14 +33,7 @@ const EnvironmentTable& environment_table(const std::string& name);
 
 // the environment placed for a scene whose largest initial x is `max_x0`:
 // features start at x_f = max_x0 + 0.05 (SPEC §3); the first segment is flat ground at y = 0;
-// its contact law is contact_law()
-sim::Environment place_environment(const EnvironmentTable& table, double max_x0);
-
-// the contact law of every environment placed from now on, in this process (run.contact; coulomb until set).
-// A run sets it from its config before it builds a scene (as run.precision sets sim::set_default_float_networks),
-// and so do the commands that rebuild a run's scenes from its stored config (export, grad-diag); a scene file
-// carries its own law, so `simulate` never reads this.
-void set_contact_law(sim::ContactLaw law);
-sim::ContactLaw contact_law();
+// its contact law is `law` (the run's run.contact: io::run_physics)
+sim::Environment place_environment(const EnvironmentTable& table, double max_x0, sim::ContactLaw law);
 
 }  // namespace divcoll::io

@@ -270,15 +270,16 @@ std::vector<std::pair<int, int>> validation_pairs(bool diverse, int n, int batch
 
 ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, int steps, int bptt_window, double pair_clip) {
-  sim::RunOptions opt;
+                      const Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
+                      double pair_clip) {
+  sim::RunOptions opt = physics.options();
   opt.steps = steps;
   opt.grad = grad;
   opt.agent_param_grad = false;  // the agents stay frozen
   opt.grad_window = bptt_window;
   ProbeSum sum;
   sum.pair_clip = pair_clip;
-  for (const auto& [a, b] : pairs) sum.add(run_pair(sim, agents[a], agents[b], weights, tether, "flat", opt, nullptr));
+  for (const auto& [a, b] : pairs) sum.add(run_pair(sim, agents[a], agents[b], weights, tether, "flat", physics.contact, opt, nullptr));
   return sum.mean();
 }
 
@@ -293,7 +294,7 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
   auto validate = [&]() {
     if (val.empty()) return kNaN;
     out.pair_episodes_fwd += static_cast<long>(val.size());
-    return run_probe(sim, agents, val, opt.current(), false, spec.tether, spec.episode_steps, 0).travel_bl;
+    return run_probe(sim, agents, val, opt.current(), false, spec.tether, spec.physics, spec.episode_steps, 0).travel_bl;
   };
   for (int it = 0; it < spec.iterations; ++it) {
     std::vector<std::pair<int, int>> batch;
@@ -305,7 +306,7 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
     }
     std::vector<ProbeResult> rs;
     for (const Probe& p : opt.ask(it)) {
-      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.episode_steps, s.bptt_window,
+      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.physics, spec.episode_steps, s.bptt_window,
                              pair_clip(s)));
       (p.grad ? out.pair_episodes_grad : out.pair_episodes_fwd) += static_cast<long>(batch.size());
     }

@@ -166,6 +166,7 @@ struct PlainTrainResult {
 };
 struct PlainTrainSpec {
   Tether tether{};  // stiffness, amplitude and dashpot from the run config (collective::tether), always given
+  sim::RunPhysics physics{};  // the contact law and precision of every episode (io::run_physics), always given
   bool diverse = false;
   int iterations = 0, batch_pairs = 0, episode_steps = 1000, validation_pairs = 0;  // 0 = no validation
   uint64_t seed = 1, stream = 0;
@@ -173,9 +174,10 @@ struct PlainTrainSpec {
 PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agents, const OptSettings& s,
                              std::vector<double> init, const PlainTrainSpec& spec);
 
-// one probe over a list of pairs in a plain loop (grad with the window of `s`)
+// one probe over a list of pairs in a plain loop (grad with the window of `s`), each episode under `physics`
 ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, int steps, int bptt_window, double pair_clip = 0);
+                      const Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
+                      double pair_clip = 0);
 
 }  // namespace divcoll::collective

@@ -8,18 +8,9 @@
 
 namespace divcoll::evo {
 
-morph::Descriptor agent_descriptor(const collective::Agent& a) {
-  morph::AgentGeometry g;
-  g.rest_pos = a.rest_pos;
-  g.spring_i = a.spring_i;
-  g.spring_j = a.spring_j;
-  g.rest_length = a.rest_length;
-  g.amplitude = a.amplitude;
-  g.cell = morph::agent_geometry(a.cells, a.springs).cell;
-  return morph::descriptor(g);
-}
+morph::Descriptor agent_descriptor(const morph::Agent& a) { return morph::descriptor(a); }
 
-morph::Descriptor spring_layout_descriptor(const collective::Agent& a) {
+morph::Descriptor spring_layout_descriptor(const morph::Agent& a) {
   morph::Descriptor d = agent_descriptor(a);
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
   for (size_t m = 0; m < a.rest_pos.size() / 2; ++m) {
@@ -56,20 +47,19 @@ morph::Descriptor spring_layout_descriptor(const collective::Agent& a) {
   return d;
 }
 
-collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,
-                                 const GdOptions& gd) {
-  collective::Agent child = parent;
+morph::Agent make_offspring(const morph::Agent& parent, Rng& rng, const MutationOptions& opt, const GdOptions& gd) {
+  morph::Agent child = parent;
   // genotype: body bits (repaired to a valid body), then spring bits
   if (!opt.body_fixed) child.cells = morph::mutate_body(parent.cells, rng, opt.body_flip_p);
   if (!opt.springs_fixed) child.springs = morph::mutate_springs(parent.springs, rng, opt.spring_flip_p);
-  const morph::AgentGeometry g = morph::agent_geometry(child.cells, child.springs);
+  const morph::Agent g = morph::agent_geometry(child.cells, child.springs);
   child.spring_i = g.spring_i;
   child.spring_j = g.spring_j;
   child.amplitude = g.amplitude;
   if (child.cells != parent.cells) {
     child.rest_pos = g.rest_pos;  // a new body starts from its lattice points
   }
-  collective::update_rest_lengths(child);
+  morph::update_rest_lengths(child);
   // rest positions: N(0, sd²) per coordinate, kept only if every rest length stays within its bounds
   if (opt.rest_moves && opt.rest_jitter_sd > 0) {
     std::vector<double> delta(child.rest_pos.size());

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "collective/builders.hpp"
 #include "evo/gd.hpp"
+#include "morph/agent.hpp"
 #include "morph/descriptor.hpp"
 
 namespace divcoll::evo {
@@ -23,7 +23,7 @@ struct MutationOptions {
 
 // one member of a generation's pool
 struct Individual {
-  collective::Agent agent;
+  morph::Agent agent;
   int64_t id = -1;
   int64_t parent = -1;
   TrainResult train;
@@ -31,19 +31,18 @@ struct Individual {
 };
 
 // the behaviour descriptor of an agent's body (SPEC §4.2)
-morph::Descriptor agent_descriptor(const collective::Agent& a);
+morph::Descriptor agent_descriptor(const morph::Agent& a);
 
 // the descriptor for a population of one body shape (graded diversity, SPEC §7.5): entries 7 and 8, the
 // body's mirror symmetries (constant over such a population), become the mirror symmetries of its active
 // springs: the fraction of active springs whose mirror image (both ends, about the vertical / horizontal
 // centre line of the rest positions) lies within 0.01 u of an active spring. Entry 3 (active springs per
 // bounding-box area) already depends on the springs; the others are constant and drop out of uniqueness.
-morph::Descriptor spring_layout_descriptor(const collective::Agent& a);
+morph::Descriptor spring_layout_descriptor(const morph::Agent& a);
 
 // a copy of `parent` (weights and rest positions included) with its body bits flipped and repaired, its
 // spring bits flipped, and its rest positions jittered; a changed body starts from its lattice positions
-collective::Agent make_offspring(const collective::Agent& parent, Rng& rng, const MutationOptions& opt,
-                                 const GdOptions& gd);
+morph::Agent make_offspring(const morph::Agent& parent, Rng& rng, const MutationOptions& opt, const GdOptions& gd);
 
 // SPEC §4.4 deletion: among the pool, repeatedly delete the member with the lowest
 // (fitness − min fitness + 1e-6) × uniqueness (uniqueness recomputed over the remaining pool after each

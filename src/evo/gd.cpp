@@ -4,8 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "evo/optim.hpp"
+#include "morph/body.hpp"
 
 namespace divcoll::evo {
 
@@ -25,18 +27,18 @@ const char* gd_rule_name(GdRule r) {
   return "?";
 }
 
-bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta, const GdOptions& opt) {
-  const double lo = opt.rest_length_min * 0.05, hi = opt.rest_length_max * 0.05;
+bool move_rest_positions(morph::Agent& a, const std::vector<double>& delta, const GdOptions& opt) {
+  const double lo = opt.rest_length_min * morph::kSpacing, hi = opt.rest_length_max * morph::kSpacing;
   double scale = 1.0;
   for (int attempt = 0; attempt < 5; ++attempt, scale *= 0.5) {
-    collective::Agent b = a;
+    morph::Agent b = a;
     for (size_t q = 0; q < b.rest_pos.size(); ++q) b.rest_pos[q] += scale * delta[q];
     // keep min x = 0 and the lowest mass at y = 0; rest lengths are measured after the shift, so they
     // are exactly the distances between the stored positions
     double mx = b.rest_pos[0], my = b.rest_pos[1];
     for (int q = 0; q < sim::kAgentMasses; ++q) mx = std::min(mx, b.rest_pos[2 * q]), my = std::min(my, b.rest_pos[2 * q + 1]);
     for (int q = 0; q < sim::kAgentMasses; ++q) b.rest_pos[2 * q] -= mx, b.rest_pos[2 * q + 1] -= my;
-    collective::update_rest_lengths(b);
+    morph::update_rest_lengths(b);
     bool ok = true;
     for (double L : b.rest_length) ok = ok && L >= lo && L <= hi;
     if (!ok) continue;
@@ -46,7 +48,7 @@ bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta,
   return false;
 }
 
-std::vector<double> rest_gradient(const collective::Agent& a, const sim::RunResult& r) {
+std::vector<double> rest_gradient(const morph::Agent& a, const sim::RunResult& r) {
   // rest positions enter through x(0) and through the rest lengths. x(0) is the rest positions shifted
   // so that the lowest mass sits at y = 0: a mass that is lowest on its own lifts or lowers the whole
   // body when it moves, so its y gets −Σ_k ∂travel/∂x0_k,y as well. Where several masses share the
@@ -85,9 +87,10 @@ struct Eval {
   std::vector<double> g_params, g_rest;  // gradient of travel
 };
 
-Eval evaluate(const collective::Agent& a, const GdOptions& opt, sim::Simulator& sim, bool grad) {
-  const sim::Scene s = collective::agent_scene(a, "flat");
-  sim::RunOptions ro;
+Eval evaluate(const morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim,
+              bool grad) {
+  const sim::Scene s = collective::agent_scene(a, "flat", physics.contact);
+  sim::RunOptions ro = physics.options();
   ro.steps = opt.steps;
   ro.grad = grad;
   sim::RunResult r = sim.run(s, ro);
@@ -109,7 +112,7 @@ double norm(const std::vector<double>& v) {
 
 }  // namespace
 
-bool step_agent(collective::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
+bool step_agent(morph::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
                 const GdOptions& opt, Adam& adam, int epoch) {
   for (const std::vector<double>* g : {&g_params, &g_rest})
     for (double x : *g)
@@ -138,15 +141,15 @@ bool step_agent(collective::Agent& a, const std::vector<double>& g_params, const
   return true;
 }
 
-TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim) {
+TrainResult train_agent(morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim) {
   TrainResult out;
   Adam adam;  // ascent on travel: descent on −travel
-  collective::Agent best = a;
+  morph::Agent best = a;
   double best_travel = -std::numeric_limits<double>::infinity();
   sim::Status last_status = sim::Status::ok;
   for (int epoch = 0; epoch <= opt.epochs; ++epoch) {
     const bool update = epoch < opt.epochs;
-    const Eval e = evaluate(a, opt, sim, update);
+    const Eval e = evaluate(a, opt, physics, sim, update);
     out.curve_u.push_back(e.travel);
     last_status = e.status;
     if (e.status != sim::Status::ok) break;  // keep what we had before this step

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "collective/builders.hpp"
+#include "morph/agent.hpp"
 #include "evo/optim.hpp"
 #include "sim/engine.hpp"
 
@@ -28,8 +28,8 @@ struct GdOptions {
   double adam_lr = 0.01;
   bool rest_moves = true;          // whether rest positions are trained
   double rest_move_max = 0.002;    // u, largest move of any mass per epoch
-  double rest_length_min = 0.5;    // × 0.05 u
-  double rest_length_max = 1.5;    // × 0.05 u
+  double rest_length_min = 0.5;    // × morph::kSpacing (0.05 u)
+  double rest_length_max = 1.5;    // × morph::kSpacing
 };
 
 struct TrainResult {
@@ -43,23 +43,23 @@ struct TrainResult {
 };
 
 // body length of an agent (max x − min x of its rest positions), u
-using collective::body_length;
+using morph::body_length;
 
 // the gradient of travel w.r.t. the rest positions (11×2) from a graded run of agent_scene(a, "flat"):
 // through x(0), through the rest lengths, and through the shift that keeps the lowest mass at y = 0
-std::vector<double> rest_gradient(const collective::Agent& a, const sim::RunResult& r);
+std::vector<double> rest_gradient(const morph::Agent& a, const sim::RunResult& r);
 
-// trains `a` in place and returns its fitness; `sim` is reused workspace
-TrainResult train_agent(collective::Agent& a, const GdOptions& opt, sim::Simulator& sim);
+// trains `a` in place on flat ground under the run's `physics` and returns its fitness; `sim` is reused workspace
+TrainResult train_agent(morph::Agent& a, const GdOptions& opt, const sim::RunPhysics& physics, sim::Simulator& sim);
 
 // one epoch's update of `a` from the gradient of travel w.r.t. its weights (`g_params`) and rest positions
 // (`g_rest`, 11×2), by opt.rule (`adam` holds Adam's moments, `epoch` counts from 0); returns false and leaves
 // `a` untouched if either gradient has a value that is not finite
-bool step_agent(collective::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
+bool step_agent(morph::Agent& a, const std::vector<double>& g_params, const std::vector<double>& g_rest,
                 const GdOptions& opt, Adam& adam, int epoch);
 
 // moves rest positions by `delta` (11×2) if every rest length stays within the bounds (halving the move
 // up to 4 times otherwise), then shifts so that min x = min y = 0; returns whether it moved
-bool move_rest_positions(collective::Agent& a, const std::vector<double>& delta, const GdOptions& opt);
+bool move_rest_positions(morph::Agent& a, const std::vector<double>& delta, const GdOptions& opt);
 
 }  // namespace divcoll::evo

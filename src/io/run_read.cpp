@@ -128,7 +128,7 @@ std::string anchors_path(const std::string& population_group) {
   return population_group.substr(0, population_group.size() - tail.size()) + "connectors/anchors";
 }
 
-std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents) {
+std::vector<int32_t> anchors_rows(const std::vector<morph::Agent>& agents) {
   std::vector<int32_t> an;
   for (const auto& a : agents) {
     const auto& x = a.anchors;
@@ -146,7 +146,7 @@ void check_layout(const h5::Node& file, const std::string& path, std::string_vie
                      "), expected " + h5::dims_string(dims) + ": " + why);
 }
 
-void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents) {
+void read_anchors(const h5::Node& file, const std::string& path, std::vector<morph::Agent>& agents) {
   const std::vector<int32_t> an =
       read_checked<int32_t>(file, path, "agent,anchor", Dims{static_cast<hsize_t>(agents.size()), 4},
                             std::to_string(agents.size()) + " agents in the population, 4 anchors each");

@@ -7,9 +7,9 @@
 #include <string_view>
 #include <vector>
 
-#include "collective/builders.hpp"
 #include "evo/evolution.hpp"
 #include "io/h5.hpp"
+#include "morph/agent.hpp"
 
 namespace divcoll::io {
 
@@ -51,8 +51,8 @@ std::vector<double> read_weights_row(const h5::Node& file, const std::string& gr
 // `<prefix>agents` (connectors/anchors for the main population, graded/<name>/connectors/anchors for a graded one)
 std::string anchors_path(const std::string& population_group);
 // the anchors of a population as stored (population × 4: back foot, front foot, back upper, front upper)
-std::vector<int32_t> anchors_rows(const std::vector<collective::Agent>& agents);
+std::vector<int32_t> anchors_rows(const std::vector<morph::Agent>& agents);
 // the stored anchors set on `agents` (the dataset's layout checked: agent × anchor, one row per agent)
-void read_anchors(const h5::Node& file, const std::string& path, std::vector<collective::Agent>& agents);
+void read_anchors(const h5::Node& file, const std::string& path, std::vector<morph::Agent>& agents);
 
 }  // namespace divcoll::io

@@ -294,19 +294,42 @@ Body random_genotype(Rng& rng) {
 }
 
 // ---- geometry ------------------------------------------------------------------------------------
-int AgentGeometry::n_active() const {
+int Agent::n_active() const {
   return static_cast<int>(std::count_if(amplitude.begin(), amplitude.end(), [](double a) { return a != 0; }));
 }
 
-AgentGeometry agent_geometry(uint32_t cells, uint32_t springs) {
+double body_length(const Agent& a) {
+  double lo = a.rest_pos[0], hi = a.rest_pos[0];
+  for (int q = 0; q < kBodyCells; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
+  return hi - lo;
+}
+
+void update_rest_lengths(Agent& a) {
+  a.rest_length.resize(a.spring_i.size());
+  for (size_t s = 0; s < a.spring_i.size(); ++s) {
+    const int i = a.spring_i[s], j = a.spring_j[s];
+    a.rest_length[s] =
+        std::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
+  }
+}
+
+std::vector<int32_t> mass_cells(uint32_t cells) {
+  std::vector<int32_t> cell;
+  for (uint32_t m = cells; m; m &= m - 1) cell.push_back(std::countr_zero(m));
+  return cell;
+}
+
+Agent agent_geometry(uint32_t cells, uint32_t springs) {
   std::string why;
   DIVCOLL_THROW_UNLESS(is_valid_body(cells, &why), "agent_geometry: " << why);
   DIVCOLL_THROW_UNLESS(is_valid_springs(springs, &why), "agent_geometry: " << why);
-  AgentGeometry g;
+  Agent g;
+  g.cells = cells;
+  g.springs = springs;
   // masses: set cells in row-major order, at their lattice points
-  for (uint32_t m = cells; m; m &= m - 1) g.cell.push_back(std::countr_zero(m));
+  const std::vector<int32_t> cell = mass_cells(cells);
   double min_x = 1e300, min_y = 1e300;
-  for (int c : g.cell) {
+  for (int c : cell) {
     const auto p = cell_position(c);
     g.rest_pos.push_back(p[0]);
     g.rest_pos.push_back(p[1]);
@@ -321,7 +344,7 @@ AgentGeometry agent_geometry(uint32_t cells, uint32_t springs) {
   // springs: lattice edges between masses, sorted pairs (i < j)
   for (int i = 0; i < kBodyCells; ++i)
     for (int j = i + 1; j < kBodyCells; ++j)
-      if (cell_neighbours(g.cell[i]) & (1u << g.cell[j])) {
+      if (cell_neighbours(cell[i]) & (1u << cell[j])) {
         const int s = static_cast<int>(g.spring_i.size());
         g.spring_i.push_back(i);
         g.spring_j.push_back(j);
@@ -330,15 +353,6 @@ AgentGeometry agent_geometry(uint32_t cells, uint32_t springs) {
   DIVCOLL_DEMAND(g.spring_i.size() == kBodyEdges);
   update_rest_lengths(g);
   return g;
-}
-
-void update_rest_lengths(AgentGeometry& g) {
-  g.rest_length.resize(g.spring_i.size());
-  for (size_t s = 0; s < g.spring_i.size(); ++s) {
-    const int i = g.spring_i[s], j = g.spring_j[s];
-    g.rest_length[s] =
-        std::hypot(g.rest_pos[2 * j] - g.rest_pos[2 * i], g.rest_pos[2 * j + 1] - g.rest_pos[2 * i + 1]);
-  }
 }
 
 // ---- controller initialisation -------------------------------------------------------------------

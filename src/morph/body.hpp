@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "common/rng.hpp"
+#include "morph/agent.hpp"
 
 namespace divcoll::morph {
 
@@ -97,23 +98,13 @@ uint32_t mutate_springs(uint32_t springs, Rng& rng, double p = 1.0 / kBodyEdges)
 Body random_genotype(Rng& rng);
 
 // ---- geometry ------------------------------------------------------------------------------------
-// what an agent is built from (SPEC §4.1); masses in row-major cell order, springs sorted pairs
-struct AgentGeometry {
-  std::vector<int32_t> cell;        // (11) lattice cell of each mass
-  std::vector<double> rest_pos;     // (11 x 2) u, lattice points shifted so min x = 0, min y = 0
-  std::vector<int32_t> spring_i;    // (21) local mass index, spring_i < spring_j
-  std::vector<int32_t> spring_j;    // (21)
-  std::vector<double> rest_length;  // (21) u, distance between the rest positions
-  std::vector<double> amplitude;    // (21) kActiveAmplitude if active, 0 if passive
-
-  int n_active() const;
-};
-
-// the geometry of a valid body; throws InputError on an invalid genotype
-AgentGeometry agent_geometry(uint32_t cells, uint32_t springs);
-inline AgentGeometry agent_geometry(const Body& b) { return agent_geometry(b.cells, b.springs); }
-// rest lengths of `g` recomputed from its rest positions (after rest positions moved)
-void update_rest_lengths(AgentGeometry& g);
+// the lattice cells of an agent's masses: the set cells of `cells` in row-major (ascending) order
+std::vector<int32_t> mass_cells(uint32_t cells);
+// the bare agent of a valid body (SPEC §4.1): its genotypes, rest positions (the lattice points of
+// mass_cells(cells) shifted so min x = 0, min y = 0), springs, rest lengths and amplitudes; no controller
+// (params empty) and no anchors. Throws InputError on an invalid genotype
+Agent agent_geometry(uint32_t cells, uint32_t springs);
+inline Agent agent_geometry(const Body& b) { return agent_geometry(b.cells, b.springs); }
 
 // ---- controller initialisation (SPEC §4.3) -------------------------------------------------------
 // per layer, in the nn/mlp.hpp layout (W out × in row-major, then b): W ~ N(0, (g·sqrt(2/(in+out)))²)

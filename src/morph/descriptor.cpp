@@ -28,7 +28,7 @@ double mirror_fraction(const std::vector<double>& pos, int n, Mirror mirror) {
 
 }  // namespace
 
-Descriptor descriptor(const AgentGeometry& g) {
+Descriptor descriptor(const Agent& g) {
   const int n = static_cast<int>(g.rest_pos.size() / 2);
   DIVCOLL_DEMAND(n > 0);
   const auto& p = g.rest_pos;

@@ -1,6 +1,6 @@
 // behaviour descriptor of an agent body and the uniqueness score of a pool (SPEC §4.2, §4.4).
 //
-// The descriptor is computed from the rest positions and spring amplitudes of an AgentGeometry, so it
+// The descriptor is computed from the rest positions and spring amplitudes of an Agent, so it
 // follows the body as gradient descent and mutation move its rest positions. SPEC §4.2 lists nine
 // numbers, in this order:
 //   0 height   (max y − min y) / (3·0.05·√3/2), the lattice's full height
@@ -30,7 +30,7 @@ inline constexpr double kLatticeWidth = 6 * kSpacing + 0.5 * kSpacing;          
 inline constexpr double kLatticeHeight = 3 * kSpacing * 0.86602540378443864676;  // u, 3·0.05·√3/2
 inline constexpr double kMirrorTolerance = 0.01;  // u, distance within which a mirror partner counts
 
-Descriptor descriptor(const AgentGeometry& g);
+Descriptor descriptor(const Agent& g);
 
 // uniqueness of every member of a pool (SPEC §4.4): each dimension is z-scored over the pool (mean and
 // population standard deviation); a dimension whose standard deviation is at most 1e-12·max(1, |mean|)

@@ -1,7 +1,6 @@
 #include "sim/engine.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -14,11 +13,7 @@ namespace divcoll::sim {
 namespace {
 // float_networks: steps whose parameter gradients are summed in float before they join the double sums
 constexpr int kFloatGradSteps = 16;
-// RunOptions::float_networks's default (set_default_float_networks)
-std::atomic<bool> g_default_float_networks{false};
 }  // namespace
-void set_default_float_networks(bool on) { g_default_float_networks = on; }
-bool default_float_networks() { return g_default_float_networks; }
 
 const char* status_name(Status s) {
   switch (s) {

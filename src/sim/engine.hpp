@@ -30,11 +30,6 @@ namespace divcoll::sim {
 enum class Status : uint8_t { ok = 0, nan = 1, unstable = 2 };
 const char* status_name(Status s);
 
-// the process's default for RunOptions::float_networks (false until set): `divcoll run` sets it on every rank
-// from run.precision before any work, so that every episode of a run is computed in the run's precision
-void set_default_float_networks(bool on);
-bool default_float_networks();
-
 // what to compute for an episode
 struct RunOptions {
   int steps = 1000;              // control steps T
@@ -50,9 +45,26 @@ struct RunOptions {
   bool record_inputs = false;    // keep the connectors' network inputs (11 per connector spring, SPEC §6.3) at the
                                  // steps where hidden states are recorded (every hidden_every steps)
   double speed_limit = 100.0;    // u/s; a mass faster than this marks the episode unstable
-  bool float_networks = default_float_networks();  // the controllers' networks in float (inputs, weights, activations and their
+  bool float_networks = false;   // the controllers' networks in float (inputs, weights, activations and their
                                  // gradients; nn/mlp.hpp's float kernels), the physics in double: faster, and not
-                                 // the spec's double precision (SPEC §10); false = the spec's step
+                                 // the spec's double precision (SPEC §10); false = the spec's step (run.precision)
+};
+
+// a run's two choices of how every episode is computed (run.contact, run.precision; io::run_physics reads them
+// from a config). Nothing holds them for the process: whatever builds a run's scenes and episodes is given them
+// and passes them on, the contact law into every environment it places (Environment::contact, so the scene
+// carries it), the precision into every episode's options (RunOptions::float_networks)
+struct RunPhysics {
+  ContactLaw contact = ContactLaw::coulomb;
+  bool float_networks = false;
+
+  // options for an episode in this precision (every other field at its default)
+  RunOptions options() const {
+    RunOptions o;
+    o.float_networks = float_networks;
+    return o;
+  }
+  bool operator==(const RunPhysics&) const = default;
 };
 
 // what an episode produced

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "collective/builders.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "morph/body.hpp"
@@ -134,7 +135,7 @@ class AgentsPlan final : public Plan {
   std::string compute(const std::string& bytes) override {
     const auto t0 = std::chrono::steady_clock::now();
     Trained t{unpack<evo::Individual>(bytes)};
-    t.x.train = evo::train_agent(t.x.agent, gd_, sim_);
+    t.x.train = evo::train_agent(t.x.agent, gd_, def_.physics, sim_);
     t.x.descriptor = spec_.spring_descriptor ? evo::spring_layout_descriptor(t.x.agent) : evo::agent_descriptor(t.x.agent);
     t.train_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return pack(t);
@@ -217,7 +218,7 @@ std::string gen_name(const std::string& group, int g) {
   return group + b;
 }
 
-AgentsDef agents_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.agents}; }
+AgentsDef agents_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.agents, io::run_physics(cfg)}; }
 
 std::unique_ptr<Plan> make_agents_plan(const AgentsDef& def, const AgentsSpec& spec,
                                        std::vector<evo::Individual> population) {

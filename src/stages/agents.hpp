@@ -40,10 +40,11 @@ struct AgentsSpec {
   uint32_t fixed_springs = 0;          // ... and these springs (0: random springs)
   bool spring_descriptor = false;      // uniqueness on the spring-dependent descriptor entries
 };
-// the config values the agents plan reads: the run's seed and the [agents] section
+// the config values the agents plan reads: the run's seed, the [agents] section and the run's physics
 struct AgentsDef {
   uint64_t seed = 0;
   io::RunConfig::Agents agents;
+  sim::RunPhysics physics;  // run.contact, run.precision
 };
 AgentsDef agents_def(const io::RunConfig& cfg);
 

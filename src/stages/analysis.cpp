@@ -111,7 +111,7 @@ std::vector<double> finite(const std::vector<double>& v) {
 // taken over every environment's rows, restored after a resume
 class AdversityPlan final : public Plan {
  public:
-  AdversityPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+  AdversityPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                 std::array<std::vector<std::vector<double>>, 2> weights,
                 std::array<std::vector<std::pair<int, int>>, 2> pairs,
                 std::array<int, 2> type_index, int deploy_types, std::vector<std::string> novel, Deployed deployed)
@@ -119,6 +119,7 @@ class AdversityPlan final : public Plan {
         pairs_(std::move(pairs)), type_index_(type_index), novel_(std::move(novel)), deployed_(std::move(deployed)),
         E_(static_cast<int>(envs_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
         T_(deploy_types), pop_(static_cast<int>(agents.size())), tether_(collective::strength_tether(cfg, "weak")) {
+    rec_ = physics_.options();
     rec_.steps = cfg.deploy.episode_steps;
     rec_.record = true;
     const int frames = cfg.deploy.episode_steps / A_.dtw_every + 1;
@@ -295,17 +296,17 @@ class AdversityPlan final : public Plan {
     const std::string& env = envs_[env_];
     sim::RunResult full;
     const double offset = collective::alone_feature_offset(cfg_, agents_[a]);
-    const collective::PairOutcome o = collective::run_alone(sim_, agents_[a], env, rec_, &full, offset);
+    const collective::PairOutcome o = collective::run_alone(sim_, agents_[a], env, physics_.contact, rec_, &full, offset);
     AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
     if (o.status == sim::Status::ok)
       d.behaviour =
-          analysis::agent_behaviour(collective::agent_scene(agents_[a], env, {}, offset), full, 0, A_.dtw_every);
+          analysis::agent_behaviour(collective::agent_scene(agents_[a], env, physics_.contact, {}, offset), full, 0, A_.dtw_every);
     return pack(d);
   }
   std::string pair(const std::string& bytes) {
     const PairTask t = unpack<PairTask>(bytes);
     const sim::Scene s =
-        collective::pair_scene(agents_[t.a], agents_[t.b], weights_[t.type][t.replicate], tether_, envs_[env_]);
+        collective::pair_scene(agents_[t.a], agents_[t.b], weights_[t.type][t.replicate], tether_, envs_[env_], physics_.contact);
     const sim::RunResult r = sim_.run(s, rec_);
     PairDone d{r.travel, static_cast<uint8_t>(r.status), {kNaN, kNaN}};
     if (r.status == sim::Status::ok)
@@ -324,9 +325,10 @@ class AdversityPlan final : public Plan {
   }
 
   const io::RunConfig& cfg_;
+  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
   const io::RunConfig::Analysis& A_;
   const std::vector<std::string>& envs_;
-  const std::vector<collective::Agent>& agents_;
+  const std::vector<morph::Agent>& agents_;
   const std::array<std::vector<std::vector<double>>, 2> weights_;  // [type][replicate]
   const std::array<std::vector<std::pair<int, int>>, 2> pairs_;     // [type][pair]
   const std::array<int, 2> type_index_;                            // among deploy's types
@@ -507,7 +509,7 @@ class FamiliarityPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                           std::array<std::vector<std::vector<double>>, 2> weights,
                                           std::array<std::vector<std::pair<int, int>>, 2> pairs,
                                           std::array<int, 2> type_index, int deploy_types,
@@ -528,7 +530,7 @@ void run_analysis_stage(Driver& driver) {
   const std::vector<std::string>& envs = D.environments;
   const int NP = D.pairs, R = cfg.connectors.replicates;
   DIVCOLL_THROW_UNLESS(complete(file, "deploy"), file.file() << ": the analysis stage needs a complete deploy stage");
-  const std::vector<collective::Agent> agents = load_population(file);
+  const std::vector<morph::Agent> agents = load_population(cfg, file);
 
   // the two types among deploy's, their weights and pairs
   const std::vector<std::string> deploy_types = io::split(file.group("deploy").read_string("types"));

@@ -70,7 +70,7 @@ struct Deployed {
 // the adversity analysis (§8.1) as a plan. Per type of kAnalysisTypes: its weights (one per replicate), its pairs
 // and its index among deploy's `deploy_types` types; `novel`: the novel environments. It keeps references to
 // `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                           std::array<std::vector<std::vector<double>>, 2> weights,
                                           std::array<std::vector<std::pair<int, int>>, 2> pairs,
                                           std::array<int, 2> type_index, int deploy_types,

@@ -69,7 +69,7 @@ Records& operator+=(Records& a, Records b) {
 // what both plans share
 class LockstepPlan : public ConnectorsPlan {
  public:
-  LockstepPlan(const ConnectorsDef& def, const std::vector<collective::Agent>& agents,
+  LockstepPlan(const ConnectorsDef& def, const std::vector<morph::Agent>& agents,
                const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
       : def_(def), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
         N_(static_cast<int>(slots.size())), B_(spec.batch_pairs), I_(spec.iterations),
@@ -95,7 +95,7 @@ class LockstepPlan : public ConnectorsPlan {
     const ConnectorSlot& s = slots_[t.slot];
     const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
                                 weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
-    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, ro, nullptr);
+    const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, def_.physics.contact, ro, nullptr);
     return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad, static_cast<uint8_t>(o.redone_in_double)};
   }
   // row `row` of each group's (rows × columns) dataset <group>/<name>, from per-slot values
@@ -149,7 +149,7 @@ class LockstepPlan : public ConnectorsPlan {
   }
 
   const ConnectorsDef def_;
-  const std::vector<collective::Agent>& agents_;
+  const std::vector<morph::Agent>& agents_;
   const std::vector<ConnectorSlot>& slots_;
   const TrainSpec spec_;
   const SlotGroups groups_;
@@ -196,7 +196,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
     return items;
   }
   std::string compute(const std::string& item) override {
-    sim::RunOptions ro;
+    sim::RunOptions ro = def_.physics.options();
     ro.steps = spec_.episode_steps;
     ro.grad = true;
     ro.agent_param_grad = false;  // the agents stay frozen
@@ -253,7 +253,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
 // the final weights
 class ExtendedConnectorsPlan final : public LockstepPlan {
  public:
-  ExtendedConnectorsPlan(const ConnectorsDef& def, const std::vector<collective::Agent>& agents,
+  ExtendedConnectorsPlan(const ConnectorsDef& def, const std::vector<morph::Agent>& agents,
                          const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
       : LockstepPlan(def, agents, slots, spec), os_(collective::opt_settings(def.connectors)),
         es_(os_.optimizer == "cmaes"), E_(static_cast<size_t>(spec.iterations) * os_.es_popsize) {}
@@ -331,7 +331,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   std::vector<std::string> items(int) override { return items_; }
   std::string compute(const std::string& item) override {
     const PairTask t = unpack<PairTask>(item);
-    sim::RunOptions ro;
+    sim::RunOptions ro = def_.physics.options();
     ro.steps = spec_.episode_steps;
     ro.grad = t.grad != 0;
     ro.agent_param_grad = false;  // the agents stay frozen
@@ -421,17 +421,17 @@ SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots) {
   return g;
 }
 
-ConnectorsDef connectors_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.connectors}; }
+ConnectorsDef connectors_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.connectors, io::run_physics(cfg)}; }
 
 std::unique_ptr<ConnectorsPlan> make_connectors_plan(const ConnectorsDef& def,
-                                                     const std::vector<collective::Agent>& agents,
+                                                     const std::vector<morph::Agent>& agents,
                                                      const std::vector<ConnectorSlot>& slots, const TrainSpec& spec) {
   if (collective::extended(collective::opt_settings(def.connectors)))
     return std::make_unique<ExtendedConnectorsPlan>(def, agents, slots, spec);
   return std::make_unique<PlainConnectorsPlan>(def, agents, slots, spec);
 }
 
-std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<collective::Agent>& agents,
+std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<morph::Agent>& agents,
                                                   const std::vector<ConnectorSlot>& slots, const TrainSpec& spec) {
   const std::unique_ptr<ConnectorsPlan> plan = make_connectors_plan(connectors_def(driver.config()), agents, slots, spec);
   driver.drive(*plan);
@@ -439,22 +439,23 @@ std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vec
   return broadcast(driver, driver.master() ? plan->weights() : std::vector<std::vector<double>>{});
 }
 
-std::vector<collective::Agent> load_population(const io::h5::Node& file, const std::string& group) {
+std::vector<morph::Agent> load_population(const io::RunConfig& cfg, const io::h5::Node& file,
+                                               const std::string& group) {
   // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
   // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
   const std::string at = io::anchors_path(group);
   const bool stored = file.has(at);
   // every rank reads (a read made by one rank alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp)
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
   if (stored) io::read_anchors(file, at, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
   if (!stored)
-    for (auto& a : agents) a.anchors = collective::compute_anchors(a);
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a, io::run_physics(cfg));
   return agents;
 }
 
-void store_anchors(Driver& driver, const std::string& group, const std::vector<collective::Agent>& agents) {
+void store_anchors(Driver& driver, const std::string& group, const std::vector<morph::Agent>& agents) {
   const io::h5::File& file = driver.file();
   const std::string at = io::anchors_path(group);
   if (file.has(at)) return;
@@ -471,7 +472,7 @@ void run_connectors_stage(Driver& driver) {
   const auto& C = cfg.connectors;
   const std::vector<std::string>& kinds = C.kinds;
   const int K = static_cast<int>(kinds.size()), R = C.replicates;
-  const std::vector<collective::Agent> agents = load_population(file);
+  const std::vector<morph::Agent> agents = load_population(cfg, file);
 
   io::h5::Node stage = file.group("connectors");
   stage.write_string("kinds", io::join(kinds));

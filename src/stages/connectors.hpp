@@ -30,10 +30,11 @@ namespace divcoll::stages {
 inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
 // the final agent population of the run file on every rank, with its anchors: the stored ones
 // (io::anchors_path: connectors/anchors, graded/<name>/connectors/anchors) once its connector training stored
-// them, otherwise computed (deterministically)
-std::vector<collective::Agent> load_population(const io::h5::Node& file, const std::string& group = "agents");
+// them, otherwise computed (deterministically, under the run's physics)
+std::vector<morph::Agent> load_population(const io::RunConfig& cfg, const io::h5::Node& file,
+                                               const std::string& group = "agents");
 // stores the anchors of `agents` (the population of `group`) once, at io::anchors_path(group)
-void store_anchors(Driver& driver, const std::string& group, const std::vector<collective::Agent>& agents);
+void store_anchors(Driver& driver, const std::string& group, const std::vector<morph::Agent>& agents);
 
 // one connector being trained: its springs, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its
@@ -52,10 +53,11 @@ struct TrainSpec {
   int iterations = 0, batch_pairs = 0, episode_steps = 0;
 };
 
-// the config values connector training reads: the run's seed and the [connectors] section
+// the config values connector training reads: the run's seed, the [connectors] section and the run's physics
 struct ConnectorsDef {
   uint64_t seed = 0;
   io::RunConfig::Connectors connectors;
+  sim::RunPhysics physics;  // run.contact, run.precision
 };
 ConnectorsDef connectors_def(const io::RunConfig& cfg);
 
@@ -69,12 +71,12 @@ class ConnectorsPlan : public Plan {
   virtual std::vector<std::vector<double>> weights() const = 0;
 };
 std::unique_ptr<ConnectorsPlan> make_connectors_plan(const ConnectorsDef& def,
-                                                     const std::vector<collective::Agent>& agents,
+                                                     const std::vector<morph::Agent>& agents,
                                                      const std::vector<ConnectorSlot>& slots, const TrainSpec& spec);
 
 // trains every slot in lock-step (make_connectors_plan, driven), resuming from the state group's committed
 // state; returns the trained weights on every rank
-std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<collective::Agent>& agents,
+std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vector<morph::Agent>& agents,
                                                   const std::vector<ConnectorSlot>& slots, const TrainSpec& spec);
 
 // the slots' groups in first-appearance order, with their column counts

@@ -41,7 +41,7 @@ void serialize(Ar& ar, DeployDone& d, unsigned) {
 // then every collective type × replicate × pair); the rows of round e are row e of every dataset
 class DeployPlan final : public Plan {
  public:
-  DeployPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, DeployTypes types)
+  DeployPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, DeployTypes types)
       : cfg_(cfg), D_(cfg.deploy), agents_(agents), types_(std::move(types.names)), weights_(std::move(types.weights)),
         tethers_(std::move(types.tethers)), diverse_(std::move(types.diverse)), E_(static_cast<int>(D_.environments.size())),
         NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(cfg.connectors.replicates),
@@ -96,20 +96,20 @@ class DeployPlan final : public Plan {
     DeployDone d;
     const bool hidden = e.type >= 0 && std::find(hidden_types_.begin(), hidden_types_.end(), e.type) != hidden_types_.end();
     collective::PairOutcome o;
-    sim::RunOptions opt;
+    sim::RunOptions opt = physics_.options();
     opt.steps = D_.episode_steps;
     opt.record = early_;
     sim::RunResult full;
     if (e.type < 0) {
-      o = collective::run_alone(sim_, agents_[e.a], env, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
-      if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / collective::body_length(agents_[e.a]);
+      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
+      if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / morph::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
       opt.record_inputs = hidden && inputs_;
-      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, opt, &full);
+      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, physics_.contact, opt, &full);
       if (early_)
         d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D_.early_step) /
-                     (0.5 * (collective::body_length(agents_[e.a]) + collective::body_length(agents_[e.b])));
+                     (0.5 * (morph::body_length(agents_[e.a]) + morph::body_length(agents_[e.b])));
       if (hidden) {
         // the episode's stream: (seed, deploy + 1, the episode's index in every environment's list)
         const uint64_t item = ((static_cast<uint64_t>(env_) * T_ + e.type) * R_ + e.replicate) * NP_ + e.pair;
@@ -200,8 +200,9 @@ class DeployPlan final : public Plan {
 
  private:
   const io::RunConfig& cfg_;
+  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
   const io::RunConfig::Deploy& D_;
-  const std::vector<collective::Agent>& agents_;
+  const std::vector<morph::Agent>& agents_;
   const std::vector<std::string> types_;
   const std::vector<std::vector<std::vector<double>>> weights_;  // [type][replicate] → params
   const std::vector<collective::Tether> tethers_;
@@ -221,7 +222,7 @@ class DeployPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                        DeployTypes types) {
   return std::make_unique<DeployPlan>(cfg, agents, std::move(types));
 }
@@ -229,7 +230,7 @@ std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vect
 void run_deploy_stage(Driver& driver) {
   const io::RunConfig& cfg = driver.config();
   io::h5::File& file = driver.file();
-  const std::vector<collective::Agent> agents = load_population(file);
+  const std::vector<morph::Agent> agents = load_population(cfg, file);
   const int R = cfg.connectors.replicates;
   DeployTypes types;
   for (const std::string& kind : cfg.connectors.kinds) {

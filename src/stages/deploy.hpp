@@ -41,7 +41,7 @@ struct DeployTypes {
 // the deployment as a plan: one round per environment, one item per episode (every agent alone, then every
 // collective type × replicate × pair); the rows of round e are row e of every dataset. It keeps references to
 // `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                        DeployTypes types);
 
 }  // namespace divcoll::stages

@@ -24,15 +24,15 @@ std::vector<int32_t> distinct_agents(Rng& rng, int population, int n) {
 }
 
 // one agent alone, a pair (or, with `chains`, a heap-order chain), forward only
-EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<collective::Agent>& agents,
+EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<morph::Agent>& agents,
                           const std::vector<std::vector<double>>& weights, const collective::Tether& tether,
-                          const std::vector<std::string>& envs, int steps, bool chains) {
-  std::vector<const collective::Agent*> ptr;
+                          const sim::RunPhysics& physics, const std::vector<std::string>& envs, int steps, bool chains) {
+  std::vector<const morph::Agent*> ptr;
   for (int32_t a : e.agents) ptr.push_back(&agents[a]);
   const collective::PairOutcome o =
-      ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], steps)
-      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], tether, envs[e.env], steps, false)
-                      : collective::run_chain(sim, ptr, weights[e.weights], tether, envs[e.env], steps);
+      ptr.size() == 1 ? collective::run_alone(sim, *ptr[0], envs[e.env], physics, steps)
+      : !chains ? collective::run_pair(sim, *ptr[0], *ptr[1], weights[e.weights], tether, envs[e.env], physics, steps, false)
+                      : collective::run_chain(sim, ptr, weights[e.weights], tether, envs[e.env], physics, steps);
   return EpisodeDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status)};
 }
 

@@ -37,9 +37,9 @@ std::vector<std::string> novel_environments(const io::RunConfig& cfg);
 std::vector<int32_t> distinct_agents(Rng& rng, int population, int n);
 
 // one agent alone, a pair (or, with `chains`, a heap-order chain), forward only
-EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<collective::Agent>& agents,
+EpisodeDone group_episode(sim::Simulator& sim, const GroupEpisode& e, const std::vector<morph::Agent>& agents,
                           const std::vector<std::vector<double>>& weights, const collective::Tether& tether,
-                          const std::vector<std::string>& envs, int steps, bool chains);
+                          const sim::RunPhysics& physics, const std::vector<std::string>& envs, int steps, bool chains);
 
 // an episode's cost for the farm's order: its agents (a connector costs about as much as an agent's network)
 double episode_cost(const GroupEpisode& e);
@@ -58,11 +58,12 @@ class EpisodesPlan final : public Plan {
     std::vector<uint64_t> dims;  // after the environment axis; the part's items: their product
   };
   using Summary = std::function<std::string(int env, const std::vector<EpisodeDone>& round)>;
-  EpisodesPlan(std::string label, std::string group, const std::vector<collective::Agent>& agents,
-               std::vector<std::vector<double>> weights, collective::Tether tether, std::vector<std::string> envs, int steps,
+  EpisodesPlan(std::string label, std::string group, const std::vector<morph::Agent>& agents,
+               std::vector<std::vector<double>> weights, collective::Tether tether, sim::RunPhysics physics,
+               std::vector<std::string> envs, int steps,
                std::vector<Part> parts, std::function<std::vector<GroupEpisode>(int env)> round_items, Summary summary)
       : label_(std::move(label)), group_(std::move(group)), agents_(agents), weights_(std::move(weights)),
-        tether_(tether), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
+        tether_(tether), physics_(physics), envs_(std::move(envs)), steps_(steps), parts_(std::move(parts)),
         round_items_(std::move(round_items)), summary_(std::move(summary)) {}
   Info info() const override {
     Info i{label_, group_, "envs_done", "environment", "episodes", 1};
@@ -80,7 +81,7 @@ class EpisodesPlan final : public Plan {
   }
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, envs_, steps_, false));
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, physics_, envs_, steps_, false));
   }
   void reduce(int e, int64_t, const std::string& bytes) override { done_[e].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int e) override {
@@ -108,9 +109,10 @@ class EpisodesPlan final : public Plan {
 
  private:
   const std::string label_, group_;
-  const std::vector<collective::Agent>& agents_;
+  const std::vector<morph::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
   const collective::Tether tether_;
+  const sim::RunPhysics physics_;  // run.contact, run.precision
   const std::vector<std::string> envs_;
   const int steps_;
   const std::vector<Part> parts_;

@@ -50,7 +50,7 @@ std::pair<AgentsDef, AgentsSpec> graded_agents(const io::RunConfig& cfg, int v, 
 }
 
 std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, int v,
-                                                      const std::vector<collective::Agent>& agents,
+                                                      const std::vector<morph::Agent>& agents,
                                                       std::vector<std::vector<double>> weights,
                                                       std::vector<std::pair<int, int>> pairs) {
   const std::vector<std::string>& envs = cfg.deploy.environments;
@@ -73,7 +73,7 @@ std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, 
   };
   const uint64_t uG = GP, uR = R, uN = NP;
   return std::make_unique<EpisodesPlan>(std::string("graded ") + kGradedPopulations[v] + " deploy", base, agents,
-                                        std::move(weights), collective::tether(cfg, "weak_diverse"), envs,
+                                        std::move(weights), collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
                                         cfg.deploy.episode_steps,
                                         std::vector<EpisodesPlan::Part>{{base + "/deploy/agents", {uG}},
                                                                         {base + "/deploy/pairs", {uR, uN}}},
@@ -102,7 +102,7 @@ void run_graded_stage(Driver& driver) {
       // 1. the population: one body (and for v = 1 one spring genotype), rest positions fixed
       const auto [def, spec] = graded_agents(cfg, v, shape);
       driver.with_status(spec.group, [&] { run_agents(driver, def, spec); });
-      const std::vector<collective::Agent> agents = load_population(file, spec.group);
+      const std::vector<morph::Agent> agents = load_population(cfg, file, spec.group);
 
       // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
       if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");

@@ -47,7 +47,7 @@ std::pair<AgentsDef, AgentsSpec> graded_agents(const io::RunConfig& cfg, int v, 
 // population v's deployment as a plan: agents alone and its diverse `pairs` with its weak diverse-trained
 // connectors (`weights`, one per replicate) in every environment. It keeps a reference to `agents`
 std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, int v,
-                                                      const std::vector<collective::Agent>& agents,
+                                                      const std::vector<morph::Agent>& agents,
                                                       std::vector<std::vector<double>> weights,
                                                       std::vector<std::pair<int, int>> pairs);
 

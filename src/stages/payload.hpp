@@ -1,5 +1,5 @@
 // the payloads of plans (stages/plan.hpp): items and results are bytes, binary Boost.Serialization archives of
-// plain data (collective::Agent, evo::TrainResult, ...; each stage's own task and result structs beside its plan).
+// plain data (morph::Agent, evo::TrainResult, ...; each stage's own task and result structs beside its plan).
 // pack() and unpack() are the only way in and out, for the MPI farm (mpi/protocol.hpp) and the serial farm alike.
 #pragma once
 
@@ -14,7 +14,7 @@
 #include <streambuf>
 #include <string>
 
-#include "collective/builders.hpp"
+#include "morph/agent.hpp"
 #include "evo/evolution.hpp"
 #include "evo/gd.hpp"
 
@@ -91,12 +91,12 @@ void serialize(Ar& ar, EpisodeDone& d, unsigned) {
 namespace boost::serialization {
 
 template <class Ar>
-void serialize(Ar& ar, divcoll::collective::Anchors& a, unsigned) {
+void serialize(Ar& ar, divcoll::morph::Anchors& a, unsigned) {
   ar & a.back_foot & a.front_foot & a.back_upper & a.front_upper;
 }
 
 template <class Ar>
-void serialize(Ar& ar, divcoll::collective::Agent& a, unsigned) {
+void serialize(Ar& ar, divcoll::morph::Agent& a, unsigned) {
   ar & a.cells & a.springs & a.rest_pos & a.spring_i & a.spring_j & a.rest_length & a.amplitude & a.params & a.anchors;
 }
 

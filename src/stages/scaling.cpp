@@ -19,7 +19,7 @@ namespace {
 // R..2R−1: weak diverse-trained
 class ScalingPlan final : public Plan {
  public:
-  ScalingPlan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents, std::vector<std::vector<double>> weights)
+  ScalingPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, std::vector<std::vector<double>> weights)
       : cfg_(cfg), S_(cfg.scaling), agents_(agents), weights_(std::move(weights)),
         E_(static_cast<int>(cfg.deploy.environments.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
         R_(cfg.connectors.replicates), chains_(NS_ * 2) {
@@ -75,7 +75,7 @@ class ScalingPlan final : public Plan {
   // the 20-agent chains first, so that an environment's round ends on 5-agent ones
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"),
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"), io::run_physics(cfg_),
                               cfg_.deploy.environments, S_.episode_steps, true));
   }
   void reduce(int ei, int64_t, const std::string& bytes) override { done_[ei].push_back(unpack<EpisodeDone>(bytes)); }
@@ -104,7 +104,7 @@ class ScalingPlan final : public Plan {
  private:
   const io::RunConfig& cfg_;
   const io::RunConfig::Scaling& S_;
-  const std::vector<collective::Agent>& agents_;
+  const std::vector<morph::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
   const int E_, NS_, D_, R_;
   std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
@@ -115,7 +115,7 @@ class ScalingPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                         std::vector<std::vector<double>> weights) {
   return std::make_unique<ScalingPlan>(cfg, agents, std::move(weights));
 }
@@ -124,7 +124,7 @@ void run_scaling_stage(Driver& driver) {
   const io::RunConfig& cfg = driver.config();
   io::h5::File& file = driver.file();
   const int R = cfg.connectors.replicates;
-  const std::vector<collective::Agent> agents = load_population(file);
+  const std::vector<morph::Agent> agents = load_population(cfg, file);
   std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
   for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
   ScalingPlan plan(cfg, agents, std::move(weights));

@@ -24,7 +24,7 @@ inline constexpr uint64_t kScalingStage = io::stage_stream("scaling");
 // the chains as a plan: one round per environment, one item per chain (size × variant × replicate × draw).
 // `weights`: the weak uniform-trained replicates, then the weak diverse-trained ones. It keeps references to
 // `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<collective::Agent>& agents,
+std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
                                         std::vector<std::vector<double>> weights);
 
 }  // namespace divcoll::stages

@@ -20,7 +20,7 @@ void run_specialists_stage(Driver& driver) {
   const auto& S = cfg.specialists;
   const std::vector<std::string> envs = novel_environments(cfg);
   const int E = static_cast<int>(envs.size()), R = S.replicates, NP = cfg.deploy.pairs;
-  const std::vector<collective::Agent> agents = load_population(file);
+  const std::vector<morph::Agent> agents = load_population(cfg, file);
   const int pop = static_cast<int>(agents.size());
 
   io::h5::Node stage = file.group("specialists");
@@ -59,7 +59,7 @@ void run_specialists_stage(Driver& driver) {
                   bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
     return std::string(b);
   };
-  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), envs,
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
                     cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   driver.drive(plan);

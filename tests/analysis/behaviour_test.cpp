@@ -14,8 +14,8 @@ namespace divcoll::analysis {
 namespace {
 
 TEST(Behaviour, FramesAreCentredPositionsEveryKthStep) {
-  const collective::Agent a = testing::agent_with_anchors(5, 77);
-  const sim::Scene s = collective::agent_scene(a, "flat");
+  const morph::Agent a = testing::agent_with_anchors(5, 77);
+  const sim::Scene s = collective::agent_scene(a, "flat", testing::kCoulomb);
   sim::Simulator sim;
   sim::RunOptions opt;
   opt.steps = 95;
@@ -42,16 +42,16 @@ TEST(Behaviour, FramesAreCentredPositionsEveryKthStep) {
 }
 
 TEST(Behaviour, PairSlotsAreTheTwoAgentsAndAloneMatchesItsOwnScene) {
-  const collective::Agent a = testing::agent_with_anchors(5, 78), c = testing::agent_with_anchors(5, 79);
+  const morph::Agent a = testing::agent_with_anchors(5, 78), c = testing::agent_with_anchors(5, 79);
   const std::vector<double> w(sim::connector_param_count(), 0.0);
-  const sim::Scene s = collective::pair_scene(a, c, w, collective::kWeakConnector, "flat");
+  const sim::Scene s = collective::pair_scene(a, c, w, testing::weak_connector(), "flat", testing::kCoulomb);
   sim::Simulator sim;
   sim::RunOptions opt;
   opt.steps = 40;
   opt.record = true;
   const sim::RunResult r = sim.run(s, opt);
   // frame 0: each slot's shape is its agent's own initial shape (placement only translates)
-  const sim::Scene sa = collective::agent_scene(a, "flat"), sc = collective::agent_scene(c, "flat");
+  const sim::Scene sa = collective::agent_scene(a, "flat", testing::kCoulomb), sc = collective::agent_scene(c, "flat", testing::kCoulomb);
   sim::RunOptions zero = opt;
   zero.steps = 1;
   const sim::RunResult ra = sim.run(sa, zero), rc = sim.run(sc, zero);

@@ -9,6 +9,7 @@
 #include "config/environments.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
@@ -24,25 +25,25 @@ double max_x_of(const sim::Scene& s, int agent) {
   return m;
 }
 
-collective::Agent agent(uint64_t seed) {
+morph::Agent agent(uint64_t seed) {
   Rng rng = make_rng(seed, 5, 0);
-  collective::Agent a = collective::random_agent(rng);
-  a.anchors = collective::compute_anchors(a, {}, 300);
+  morph::Agent a = collective::random_agent(rng);
+  a.anchors = collective::compute_anchors(a, testing::kSpec, {}, 300);
   return a;
 }
 
 // a bar of 11 cells ... is not a valid body; use the flattest valid body: the one with the most cells in row 0
-collective::Agent passive_flat_agent() {
+morph::Agent passive_flat_agent() {
   uint32_t best = 0;
   int best_row0 = -1;
   for (uint32_t cells : morph::all_valid_placements()) {
     const int row0 = __builtin_popcount(cells & 0x7f);
     if (row0 > best_row0) best_row0 = row0, best = cells;
   }
-  collective::Agent a;
+  morph::Agent a;
   a.cells = best;
   a.springs = 1;
-  const morph::AgentGeometry g = morph::agent_geometry(a.cells, a.springs);
+  const morph::Agent g = morph::agent_geometry(a.cells, a.springs);
   a.rest_pos = g.rest_pos;
   a.spring_i = g.spring_i;
   a.spring_j = g.spring_j;
@@ -53,8 +54,8 @@ collective::Agent passive_flat_agent() {
 }
 
 TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
-  const collective::Agent a = passive_flat_agent();
-  const collective::Anchors an = collective::compute_anchors(a);
+  const morph::Agent a = passive_flat_agent();
+  const morph::Anchors an = collective::compute_anchors(a, testing::kSpec);
   double com = 0;
   for (int q = 0; q < 11; ++q) com += a.rest_pos[2 * q] / 11;
   // resting on its bottom row: every bottom-row mass touches at every step; the tie goes to the lowest
@@ -77,9 +78,9 @@ TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
 }
 
 TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
-  const collective::Agent p = agent(1), a = agent(2);
+  const morph::Agent p = agent(1), a = agent(2);
   Rng rng = make_rng(1, 6, 0);
-  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), collective::kWeakConnector, "flat");
+  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 2);
   EXPECT_EQ(s.n_connectors(), 1);
   EXPECT_NEAR(min_x_of(s, 1), max_x_of(s, 0) + 0.05, 1e-15);
@@ -89,7 +90,7 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
     EXPECT_GE(s.spring_j[sp], 11) << "spring j is on the anterior";
     EXPECT_TRUE(std::isfinite(s.rest_length[sp]));
     EXPECT_GT(s.rest_length[sp], 0.05);
-    EXPECT_EQ(s.stiffness[sp], collective::kWeakConnector.stiffness);
+    EXPECT_EQ(s.stiffness[sp], testing::weak_connector().stiffness);
     EXPECT_EQ(s.amplitude[sp], 0.6);
   }
   // spring order of SPEC §6.2
@@ -102,10 +103,10 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   double ymin = 1e9;
   for (int i = 0; i < s.n_masses(); ++i) ymin = std::min(ymin, s.x0[2 * i + 1]);
   EXPECT_EQ(ymin, 0.0);
-  const sim::Scene g = collective::pair_scene(p, a, s.connector_params, collective::kWeakConnector, "gap");
+  const sim::Scene g = collective::pair_scene(p, a, s.connector_params, testing::weak_connector(), "gap", testing::kCoulomb);
   EXPECT_NEAR(g.env.terrain[1].x_start, max_x_of(g, 1) + 0.05, 1e-15);
   // a tether of another stiffness and amplitude reaches the 5 connector springs and no agent spring
-  const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25, 7.5}, "flat");
+  const sim::Scene t = collective::pair_scene(p, a, s.connector_params, collective::Tether{1234.5, 0.25, 7.5}, "flat", testing::kCoulomb);
   for (int r = 0; r < 5; ++r) {
     EXPECT_EQ(t.stiffness[t.connector_spring_index[r]], 1234.5);
     EXPECT_EQ(t.amplitude[t.connector_spring_index[r]], 0.25);
@@ -117,12 +118,12 @@ TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
 }
 
 TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < 7; ++q) agents.push_back(agent(10 + q));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   Rng rng = make_rng(2, 6, 0);
-  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), collective::kWeakConnector, "flat");
+  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 7);
   EXPECT_EQ(s.n_connectors(), 6);
   for (int k = 1; k < 7; ++k) {
@@ -133,9 +134,9 @@ TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
     EXPECT_EQ(s.spring_j[sp] / 11, parent) << "connector " << k - 1 << " ends on the parent";
   }
   for (int k = 1; k < 7; ++k) EXPECT_LT(max_x_of(s, k), min_x_of(s, 0)) << "agent 0 is front-most";
-  EXPECT_THROW(collective::chain_scene({ptr[0]}, s.connector_params, collective::kWeakConnector, "flat"), InputError);
+  EXPECT_THROW(collective::chain_scene({ptr[0]}, s.connector_params, testing::weak_connector(), "flat", testing::kCoulomb), InputError);
   // a chain's every connector spring gets the tether's dashpot, no agent spring does
-  const sim::Scene d = collective::chain_scene(ptr, s.connector_params, collective::Tether{5e3, 0.6, 3.0}, "flat");
+  const sim::Scene d = collective::chain_scene(ptr, s.connector_params, collective::Tether{5e3, 0.6, 3.0}, "flat", testing::kCoulomb);
   for (int sp : d.connector_spring_index) EXPECT_EQ(d.damping[sp], 3.0);
   for (int sp : d.agent_spring_index) EXPECT_EQ(d.damping[sp], 0.0);
 }

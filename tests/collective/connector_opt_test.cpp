@@ -269,32 +269,32 @@ TEST(ConnectorOpt, AntitheticEsImprovesAKnownObjectiveAndResumesFromItsState) {
 }
 
 TEST(ConnectorOpt, TruncatedBackpropagationEqualsTheFullGradientWhenTheWindowCoversTheEpisode) {
-  const collective::Agent p = testing::agent_with_anchors(1, 77), q = testing::agent_with_anchors(2, 77);
+  const morph::Agent p = testing::agent_with_anchors(1, 77), q = testing::agent_with_anchors(2, 77);
   Rng wrng = make_rng(4, 1, 0);
   const std::vector<double> w = morph::init_connector_params(wrng, 1.0);
   sim::Simulator sim;
   sim::RunOptions opt;
   opt.steps = 120;
   opt.grad = true;
-  const auto full = collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", opt, nullptr);
+  const auto full = collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, opt, nullptr);
   for (int W : {120, 500}) {
     opt.grad_window = W;
-    const auto tr = collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", opt, nullptr);
+    const auto tr = collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, opt, nullptr);
     EXPECT_EQ(tr.grad, full.grad) << "window " << W;
     EXPECT_EQ(tr.travel_u, full.travel_u);
   }
   // a shorter window cuts the adjoint
   opt.grad_window = 60;
-  const auto cut = collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", opt, nullptr);
+  const auto cut = collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, opt, nullptr);
   EXPECT_NE(cut.grad, full.grad);
   sim::RunOptions o60;
   o60.steps = 60;
   o60.grad = true;
-  const auto g60 = collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", o60, nullptr);
+  const auto g60 = collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, o60, nullptr);
   o60.grad_window = 60;  // a window as long as the episode: no cut
-  EXPECT_EQ(collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", o60, nullptr).grad, g60.grad);
+  EXPECT_EQ(collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, o60, nullptr).grad, g60.grad);
   o60.grad_window = 30;  // cut inside: differs from the 60-step full gradient
-  EXPECT_NE(collective::run_pair(sim, p, q, w, collective::kWeakConnector, "flat", o60, nullptr).grad, g60.grad);
+  EXPECT_NE(collective::run_pair(sim, p, q, w, testing::weak_connector(), "flat", testing::kCoulomb, o60, nullptr).grad, g60.grad);
   // truncation changes only the gradient, never the episode
   EXPECT_EQ(cut.travel_u, full.travel_u);
 }

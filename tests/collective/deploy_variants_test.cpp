@@ -13,9 +13,9 @@ namespace {
 
 TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   const io::RunConfig d = io::default_config();
-  EXPECT_EQ(collective::tether(d, "weak_uniform").stiffness, collective::kWeakConnector.stiffness);
-  EXPECT_EQ(collective::tether(d, "strong_diverse").stiffness, collective::kStrongConnector.stiffness);
-  EXPECT_EQ(collective::tether(d, "weak_diverse").amplitude, collective::kConnectorAmplitude);
+  EXPECT_EQ(collective::tether(d, "weak_uniform").stiffness, d.connectors.weak_stiffness);
+  EXPECT_EQ(collective::tether(d, "strong_diverse").stiffness, d.connectors.strong_stiffness);
+  EXPECT_EQ(collective::tether(d, "weak_diverse").amplitude, d.connectors.amplitude);
   const io::RunConfig c = io::apply_overrides(
       d, {"connectors.amplitude=0.3", "connectors.weak_stiffness=700", "connectors.strong_stiffness=9000"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
@@ -35,7 +35,7 @@ TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
     EXPECT_EQ(collective::tether(follow, kind).stiffness, 0.0) << kind;
     EXPECT_EQ(collective::tether(follow, kind).damping, 12.5) << kind;
-    EXPECT_EQ(collective::tether(follow, kind).amplitude, collective::kConnectorAmplitude) << kind;
+    EXPECT_EQ(collective::tether(follow, kind).amplitude, d.connectors.amplitude) << kind;
   }
   EXPECT_EQ(collective::strength_tether(follow, "strong").stiffness, 0.0);
   EXPECT_THROW(collective::tether(c, "medium_uniform"), InputError);

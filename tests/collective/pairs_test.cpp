@@ -19,20 +19,20 @@ void PrintTo(const Tether& t, std::ostream* os) { *os << "Tether{k " << t.stiffn
 }  // namespace collective
 namespace {
 
-collective::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
+morph::Agent agent(uint64_t seed) { return testing::agent_with_anchors(seed, 77); }
 
 // the training loss of SPEC §6.4 on one batch, and its gradient w.r.t. the connector weights
 struct Loss {
   double value = 0;
   std::vector<double> grad;
 };
-Loss batch_loss(const std::vector<collective::Agent>& agents, const std::vector<std::pair<int, int>>& batch,
+Loss batch_loss(const std::vector<morph::Agent>& agents, const std::vector<std::pair<int, int>>& batch,
                 const std::vector<double>& w, const collective::Tether& k, const std::string& env, int steps, bool grad) {
   sim::Simulator sim;
   Loss l;
   l.grad.assign(w.size(), 0.0);
   for (const auto& [a, b] : batch) {
-    const collective::PairOutcome o = collective::run_pair(sim, agents[a], agents[b], w, k, env, steps, grad);
+    const collective::PairOutcome o = collective::run_pair(sim, agents[a], agents[b], w, k, env, testing::kSpec, steps, grad);
     EXPECT_EQ(o.status, sim::Status::ok);
     l.value -= o.travel_u / batch.size();
     if (grad)
@@ -47,7 +47,7 @@ class PairLossGradient : public ::testing::TestWithParam<std::pair<const char*, 
 // directions, for a weak and a strong connector on flat and on a novel environment
 TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
   const auto [env, k] = GetParam();
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (uint64_t s = 0; s < 4; ++s) agents.push_back(agent(s));
   Rng prng = make_rng(3, 1, 0);
   const auto batch = collective::random_pairs(prng, 4, 3);
@@ -78,9 +78,9 @@ TEST_P(PairLossGradient, MatchesCentralDifferencesAlongRandomDirections) {
   }
 }
 INSTANTIATE_TEST_SUITE_P(WeakAndStrong, PairLossGradient,
-                         ::testing::Values(std::pair{"flat", collective::kWeakConnector},
-                                           std::pair{"flat", collective::kStrongConnector},
-                                           std::pair{"ice", collective::kWeakConnector},
+                         ::testing::Values(std::pair{"flat", testing::weak_connector()},
+                                           std::pair{"flat", testing::strong_connector()},
+                                           std::pair{"ice", testing::weak_connector()},
                                            // connectors.amplitude other than the paper reading's 0.6
                                            std::pair{"flat", collective::Tether{5e3, 0.3}}),
                          [](const auto& info) {  // e.g. flat_k5000_a60 (amplitude in %)
@@ -92,19 +92,19 @@ INSTANTIATE_TEST_SUITE_P(WeakAndStrong, PairLossGradient,
 // connectors.amplitude = 0 makes passive tethers: the connector network's output moves no spring, so travel does
 // not depend on its weights and their gradient is exactly zero; any other amplitude lets the weights act
 TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot) {
-  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  const std::vector<morph::Agent> agents = {agent(1), agent(2)};
   Rng rng = make_rng(5, 9, 0);
   const std::vector<double> w = morph::init_connector_params(rng, 1.0), w2 = morph::init_connector_params(rng, 1.0);
   ASSERT_NE(w, w2);
   sim::Simulator sim;
-  const collective::Tether passive{collective::kWeakConnector.stiffness, 0.0};
-  const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", 200, true);
-  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", 200, true);
+  const collective::Tether passive{testing::weak_connector().stiffness, 0.0};
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, passive, "flat", testing::kSpec, 200, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, passive, "flat", testing::kSpec, 200, true);
   ASSERT_EQ(a.status, sim::Status::ok);
   EXPECT_EQ(a.travel_u, b.travel_u);
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
-  const auto c = collective::run_pair(sim, agents[0], agents[1], w, collective::kWeakConnector, "flat", 200, true);
-  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, collective::kWeakConnector, "flat", 200, true);
+  const auto c = collective::run_pair(sim, agents[0], agents[1], w, testing::weak_connector(), "flat", testing::kSpec, 200, true);
+  const auto d = collective::run_pair(sim, agents[0], agents[1], w2, testing::weak_connector(), "flat", testing::kSpec, 200, true);
   EXPECT_NE(c.travel_u, d.travel_u);
   double gn = 0;
   for (double g : c.grad) gn += g * g;
@@ -115,7 +115,7 @@ TEST(PairAmplitude, ZeroAmplitudeMakesTheConnectorWeightsInertAndAnyOtherDoesNot
 // as it does alone from the same start (its masses' positions equal at every step, bit for bit); the connector's
 // weights change nothing and get a zero gradient. With a dashpot the agents feel each other again
 TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
-  const std::vector<collective::Agent> agents = {agent(1), agent(2)};
+  const std::vector<morph::Agent> agents = {agent(1), agent(2)};
   Rng rng = make_rng(5, 10, 0);
   const std::vector<double> w = morph::init_connector_params(rng, 1.0);
   const io::RunConfig cfg = io::apply_overrides(io::default_config(), {"connectors.follower=true"});
@@ -126,12 +126,12 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   sim::RunOptions opt;
   opt.steps = T;
   opt.record = true;
-  const sim::Scene pair = collective::pair_scene(agents[0], agents[1], w, follower, "flat");
+  const sim::Scene pair = collective::pair_scene(agents[0], agents[1], w, follower, "flat", testing::kCoulomb);
   const sim::RunResult pr = sim::simulate(pair, opt);
   ASSERT_EQ(pr.status, sim::Status::ok);
   const int N = pair.n_masses();
   for (int k = 0; k < 2; ++k) {
-    sim::Scene alone = collective::agent_scene(agents[k], "flat");
+    sim::Scene alone = collective::agent_scene(agents[k], "flat", testing::kCoulomb);
     for (int q = 0; q < sim::kAgentMasses; ++q) {
       const int i = pair.agent_mass_index[k * sim::kAgentMasses + q];
       alone.x0[2 * q] = pair.x0[2 * i], alone.x0[2 * q + 1] = pair.x0[2 * i + 1];
@@ -155,14 +155,14 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   // the controller runs but moves nothing: other weights, the same travel, a zero gradient
   sim::Simulator sim;
   const std::vector<double> w2 = morph::init_connector_params(rng, 1.0);
-  const auto a = collective::run_pair(sim, agents[0], agents[1], w, follower, "flat", T, true);
-  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, follower, "flat", T, true);
+  const auto a = collective::run_pair(sim, agents[0], agents[1], w, follower, "flat", testing::kSpec, T, true);
+  const auto b = collective::run_pair(sim, agents[0], agents[1], w2, follower, "flat", testing::kSpec, T, true);
   EXPECT_EQ(a.travel_u, b.travel_u);
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
   // a dashpot couples the two again
   const collective::Tether damped =
       collective::tether(io::apply_overrides(cfg, {"connectors.damping=20"}), "weak_diverse");
-  EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", T, false).travel_u, a.travel_u);
+  EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", testing::kSpec, T, false).travel_u, a.travel_u);
 }
 
 TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithItself) {
@@ -183,15 +183,15 @@ TEST(PairLists, UniformIsEachAgentWithItsCloneAndDiverseNeverPairsAnAgentWithIts
 }
 
 TEST(Chains, TravelInBodyLengthsIsTravelOverTheMeanBodyLength) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (uint64_t s = 0; s < 5; ++s) agents.push_back(agent(10 + s));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   double bl = 0;
-  for (const auto& a : agents) ptr.push_back(&a), bl += collective::body_length(a) / 5;
+  for (const auto& a : agents) ptr.push_back(&a), bl += morph::body_length(a) / 5;
   Rng wrng = make_rng(6, 1, 0);
   const auto w = morph::init_connector_params(wrng, 0.1);
   sim::Simulator sim;
-  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, collective::kWeakConnector, "flat", 300);
+  const collective::PairOutcome o = collective::run_chain(sim, ptr, w, testing::weak_connector(), "flat", testing::kSpec, 300);
   ASSERT_EQ(o.status, sim::Status::ok);
   EXPECT_DOUBLE_EQ(o.travel_bl, o.travel_u / bl);
   EXPECT_NE(o.travel_u, 0.0);

@@ -461,6 +461,22 @@ TEST(ConfigRoundTrip, FlatPairsAreOverrides) {
   EXPECT_EQ(find("graded.enabled"), "true");
 }
 
+// run.contact and run.precision reach the run's scenes and episodes as one value, sim::RunPhysics: the defaults
+// are the spec's (coulomb, double), each key sets its own field, a name that is neither is refused
+TEST(ConfigPhysics, RunPhysicsIsTheConfigsContactAndPrecision) {
+  EXPECT_EQ(run_physics(default_config()), (sim::RunPhysics{sim::ContactLaw::coulomb, false}));
+  EXPECT_EQ(run_physics(apply_overrides(default_config(), {"run.contact=no_slip"})),
+            (sim::RunPhysics{sim::ContactLaw::no_slip, false}));
+  EXPECT_EQ(run_physics(apply_overrides(default_config(), {"run.precision=float_networks"})),
+            (sim::RunPhysics{sim::ContactLaw::coulomb, true}));
+  RunConfig c = default_config();
+  c.run.contact = "sticky";
+  EXPECT_THROW(run_physics(c), InputError);
+  c = default_config();
+  c.run.precision = "half";
+  EXPECT_THROW(run_physics(c), InputError);
+}
+
 TEST(ConfigStages, EnabledFollowsListAndGradedSwitch) {
   RunConfig c = default_config();
   EXPECT_TRUE(stage_enabled(c, "graded"));

@@ -18,14 +18,14 @@ namespace {
 
 constexpr int kM = sim::kAgentMasses;
 
-collective::Agent agent(uint64_t seed) {
+morph::Agent agent(uint64_t seed) {
   Rng rng = make_rng(seed, 8, 0);
   return collective::random_agent(rng);
 }
 
 // a parent whose rest positions moved off the lattice (as after training)
-collective::Agent moved_parent(uint64_t seed) {
-  collective::Agent a = agent(seed);
+morph::Agent moved_parent(uint64_t seed) {
+  morph::Agent a = agent(seed);
   Rng rng = make_rng(seed, 8, 1);
   std::vector<double> d(2 * kM);
   for (double& x : d) x = normal(rng, 0.0, 0.003);
@@ -33,18 +33,18 @@ collective::Agent moved_parent(uint64_t seed) {
   return a;
 }
 
-double min_coord(const collective::Agent& a, int axis) {
+double min_coord(const morph::Agent& a, int axis) {
   double m = a.rest_pos[axis];
   for (int q = 0; q < kM; ++q) m = std::min(m, a.rest_pos[2 * q + axis]);
   return m;
 }
 
-void expect_valid_child(const collective::Agent& c, const collective::Agent& parent, const evo::GdOptions& gd,
+void expect_valid_child(const morph::Agent& c, const morph::Agent& parent, const evo::GdOptions& gd,
                         const std::string& what) {
   std::string why;
   EXPECT_TRUE(morph::is_valid_body(c.cells, &why)) << what << ": " << why;
   EXPECT_TRUE(morph::is_valid_springs(c.springs, &why)) << what << ": " << why;
-  const morph::AgentGeometry g = morph::agent_geometry(c.cells, c.springs);
+  const morph::Agent g = morph::agent_geometry(c.cells, c.springs);
   EXPECT_EQ(c.spring_i, g.spring_i) << what;
   EXPECT_EQ(c.spring_j, g.spring_j) << what;
   EXPECT_EQ(c.amplitude, g.amplitude) << what;
@@ -71,9 +71,9 @@ TEST(EvolutionOffspring, ChildIsValidAndMatchesItsGenotype) {
     if (p > 0) opt.body_flip_p = opt.spring_flip_p = p;
     int body_changed = 0, springs_changed = 0;
     for (int i = 0; i < 200; ++i) {
-      const collective::Agent parent = moved_parent(1 + i % 7);
+      const morph::Agent parent = moved_parent(1 + i % 7);
       Rng rng = make_rng(42, 3, i);
-      const collective::Agent c = evo::make_offspring(parent, rng, opt, gd);
+      const morph::Agent c = evo::make_offspring(parent, rng, opt, gd);
       expect_valid_child(c, parent, gd, "p " + std::to_string(p) + " child " + std::to_string(i));
       body_changed += c.cells != parent.cells;
       springs_changed += c.springs != parent.springs;
@@ -91,9 +91,9 @@ TEST(EvolutionOffspring, NewBodyStartsFromItsLatticeAndOldBodyKeepsItsPositions)
   opt.rest_jitter_sd = 0;
   int seen_new = 0, seen_old = 0;
   for (int i = 0; i < 100; ++i) {
-    const collective::Agent parent = moved_parent(3 + i % 5);
+    const morph::Agent parent = moved_parent(3 + i % 5);
     Rng rng = make_rng(7, 3, i);
-    const collective::Agent c = evo::make_offspring(parent, rng, opt, gd);
+    const morph::Agent c = evo::make_offspring(parent, rng, opt, gd);
     if (c.cells != parent.cells) {
       ++seen_new;
       EXPECT_EQ(c.rest_pos, morph::agent_geometry(c.cells, c.springs).rest_pos) << "child " << i;
@@ -111,11 +111,11 @@ TEST(EvolutionOffspring, SameSeedSameChild) {
   evo::MutationOptions opt;
   opt.body_flip_p = opt.spring_flip_p = 0.1;
   for (int i = 0; i < 20; ++i) {
-    const collective::Agent parent = moved_parent(10 + i);
+    const morph::Agent parent = moved_parent(10 + i);
     Rng r1 = make_rng(5, 4, i), r2 = make_rng(5, 4, i), r3 = make_rng(5, 4, i + 1000);
-    const collective::Agent a = evo::make_offspring(parent, r1, opt, gd);
-    const collective::Agent b = evo::make_offspring(parent, r2, opt, gd);
-    const collective::Agent c = evo::make_offspring(parent, r3, opt, gd);
+    const morph::Agent a = evo::make_offspring(parent, r1, opt, gd);
+    const morph::Agent b = evo::make_offspring(parent, r2, opt, gd);
+    const morph::Agent c = evo::make_offspring(parent, r3, opt, gd);
     EXPECT_EQ(a.cells, b.cells);
     EXPECT_EQ(a.springs, b.springs);
     EXPECT_EQ(a.rest_pos, b.rest_pos);
@@ -134,11 +134,11 @@ TEST(EvolutionOffspring, FixedGenotypesNeverChange) {
     evo::MutationOptions opt;
     opt.body_flip_p = opt.spring_flip_p = 0.3;  // flips would be frequent
     (which == 0 ? opt.body_fixed : opt.springs_fixed) = true;
-    const collective::Agent parent = agent(50 + which);
+    const morph::Agent parent = agent(50 + which);
     int other_changed = 0;
     for (int i = 0; i < 200; ++i) {
       Rng rng = make_rng(9, 3, i);
-      const collective::Agent c = evo::make_offspring(parent, rng, opt, gd);
+      const morph::Agent c = evo::make_offspring(parent, rng, opt, gd);
       if (which == 0) {
         ASSERT_EQ(c.cells, parent.cells) << "body_fixed, child " << i;
         other_changed += c.springs != parent.springs;
@@ -153,7 +153,7 @@ TEST(EvolutionOffspring, FixedGenotypesNeverChange) {
 }
 
 // everything equal bit for bit except rest lengths, which may differ in the last bit (see below)
-void expect_same_agent(const collective::Agent& c, const collective::Agent& p, const std::string& what) {
+void expect_same_agent(const morph::Agent& c, const morph::Agent& p, const std::string& what) {
   EXPECT_EQ(c.cells, p.cells) << what;
   EXPECT_EQ(c.springs, p.springs) << what;
   EXPECT_EQ(c.rest_pos, p.rest_pos) << what;
@@ -174,7 +174,7 @@ TEST(EvolutionOffspring, NoFlipsNoJitterGiveTheParentBack) {
   no_moves.rest_jitter_sd = 0.005;
   no_moves.rest_moves = false;  // no jitter when rest positions do not move
   for (int i = 0; i < 20; ++i) {
-    for (const collective::Agent& parent : {agent(20 + i), moved_parent(20 + i)}) {
+    for (const morph::Agent& parent : {agent(20 + i), moved_parent(20 + i)}) {
       Rng rng = make_rng(1, 3, i);
       expect_same_agent(evo::make_offspring(parent, rng, opt, gd), parent, "parent " + std::to_string(i));
       expect_same_agent(evo::make_offspring(parent, rng, no_moves, gd), parent, "rest_moves off " + std::to_string(i));
@@ -188,13 +188,13 @@ TEST(EvolutionOffspring, NoFlipsNoJitterKeepRestLengthsBitForBit) {
   opt.body_flip_p = opt.spring_flip_p = 0;
   opt.rest_jitter_sd = 0;
   for (int i = 0; i < 20; ++i) {
-    const collective::Agent fresh = agent(60 + i), moved = moved_parent(60 + i);
+    const morph::Agent fresh = agent(60 + i), moved = moved_parent(60 + i);
     Rng rng = make_rng(1, 3, i);
     EXPECT_EQ(evo::make_offspring(fresh, rng, opt, gd).rest_length, fresh.rest_length) << "fresh parent " << i;
     EXPECT_EQ(evo::make_offspring(moved, rng, opt, gd).rest_length, moved.rest_length) << "moved parent " << i;
     // a moved agent's rest lengths are the distances of its rest positions
-    collective::Agent again = moved;
-    collective::update_rest_lengths(again);
+    morph::Agent again = moved;
+    morph::update_rest_lengths(again);
     EXPECT_EQ(again.rest_length, moved.rest_length) << "moved parent " << i;
   }
 }
@@ -344,10 +344,10 @@ TEST(EvolutionSelect, RankScoreSparesAUniqueLowFitnessMemberThatPaperScoreDelete
 
 TEST(EvolutionDescriptor, FreshAgentMatchesMorphDescriptorAndMovedAgentFollowsItsPositions) {
   for (uint64_t seed = 1; seed <= 10; ++seed) {
-    const collective::Agent a = agent(seed);
+    const morph::Agent a = agent(seed);
     EXPECT_EQ(evo::agent_descriptor(a), morph::descriptor(morph::agent_geometry(a.cells, a.springs))) << seed;
-    const collective::Agent m = moved_parent(seed);
-    morph::AgentGeometry g = morph::agent_geometry(m.cells, m.springs);
+    const morph::Agent m = moved_parent(seed);
+    morph::Agent g = morph::agent_geometry(m.cells, m.springs);
     g.rest_pos = m.rest_pos;
     morph::update_rest_lengths(g);
     EXPECT_EQ(evo::agent_descriptor(m), morph::descriptor(g)) << seed;

@@ -14,13 +14,14 @@
 #include "evo/gd.hpp"
 #include "morph/body.hpp"
 #include "sim/engine.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
 
 constexpr int kM = sim::kAgentMasses;
 
-collective::Agent agent(uint64_t seed) {
+morph::Agent agent(uint64_t seed) {
   Rng rng = make_rng(seed, 7, 0);
   return collective::random_agent(rng);
 }
@@ -34,21 +35,21 @@ evo::GdOptions short_opts(int epochs, int steps, evo::GdRule rule = evo::GdRule:
 }
 
 // travel of an agent alone on flat ground, built the way training builds it
-double travel_of(const collective::Agent& a, int steps) {
+double travel_of(const morph::Agent& a, int steps) {
   sim::RunOptions ro;
   ro.steps = steps;
-  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat"), ro);
+  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat", testing::kCoulomb), ro);
   EXPECT_EQ(r.status, sim::Status::ok) << r.message;
   return r.travel;
 }
 
-double min_coord(const collective::Agent& a, int axis) {
+double min_coord(const morph::Agent& a, int axis) {
   double m = a.rest_pos[axis];
   for (int q = 0; q < kM; ++q) m = std::min(m, a.rest_pos[2 * q + axis]);
   return m;
 }
 
-double bl_of(const collective::Agent& a) {
+double bl_of(const morph::Agent& a) {
   double lo = a.rest_pos[0], hi = a.rest_pos[0];
   for (int q = 0; q < kM; ++q) lo = std::min(lo, a.rest_pos[2 * q]), hi = std::max(hi, a.rest_pos[2 * q]);
   return hi - lo;
@@ -60,11 +61,11 @@ struct RestGrad {
   double sum_gx0_y = 0;    // Σ_k ∂travel/∂x0_{k,y}: the derivative of a uniform lift of the body
   double travel = 0;
 };
-RestGrad rest_gradient(const collective::Agent& a, int steps) {
+RestGrad rest_gradient(const morph::Agent& a, int steps) {
   sim::RunOptions ro;
   ro.steps = steps;
   ro.grad = true;
-  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat"), ro);
+  const sim::RunResult r = sim::simulate(collective::agent_scene(a, "flat", testing::kCoulomb), ro);
   EXPECT_EQ(r.status, sim::Status::ok) << r.message;
   RestGrad out;
   out.travel = r.travel;
@@ -78,11 +79,11 @@ RestGrad rest_gradient(const collective::Agent& a, int steps) {
 struct Differences {
   double central, forward, backward;
 };
-Differences fd_rest(const collective::Agent& a, int coord, double h, int steps) {
-  collective::Agent p = a, m = a;
+Differences fd_rest(const morph::Agent& a, int coord, double h, int steps) {
+  morph::Agent p = a, m = a;
   p.rest_pos[coord] += h, m.rest_pos[coord] -= h;
-  collective::update_rest_lengths(p);
-  collective::update_rest_lengths(m);
+  morph::update_rest_lengths(p);
+  morph::update_rest_lengths(m);
   const double f0 = travel_of(a, steps), fp = travel_of(p, steps), fm = travel_of(m, steps);
   return {(fp - fm) / (2 * h), (fp - f0) / h, (f0 - fm) / h};
 }
@@ -101,8 +102,8 @@ TEST(GdTrain, KeepBestNeverFallsBelowUntrainedAndUsuallyImproves) {
   int improved = 0;
   const int n = 5;
   for (uint64_t seed = 1; seed <= n; ++seed) {
-    collective::Agent a = agent(seed);
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    morph::Agent a = agent(seed);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     ASSERT_EQ(r.curve_u.size(), 9u);
     EXPECT_GE(r.travel_u, r.curve_u[0]) << "seed " << seed;
@@ -122,7 +123,7 @@ TEST(GdStep, AGradientThatIsNotFiniteLeavesTheAgentUntouched) {
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
   for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::adam, evo::GdRule::paper}) {
     const evo::GdOptions opt = short_opts(4, 100, rule);
-    const collective::Agent a0 = agent(5);
+    const morph::Agent a0 = agent(5);
     std::vector<double> gp(a0.params.size()), gr(a0.rest_pos.size());
     for (size_t q = 0; q < gp.size(); ++q) gp[q] = std::sin(0.7 * static_cast<double>(q) + 0.3);
     for (size_t q = 0; q < gr.size(); ++q) gr[q] = 0.01 * std::cos(1.3 * static_cast<double>(q));
@@ -133,14 +134,14 @@ TEST(GdStep, AGradientThatIsNotFiniteLeavesTheAgentUntouched) {
       if (bad == 1) p[0] = nan;
       if (bad == 2) r[5] = -inf;
       if (bad == 3) r[1] = nan;
-      collective::Agent a = a0;
+      morph::Agent a = a0;
       evo::Adam adam;
       EXPECT_FALSE(evo::step_agent(a, p, r, opt, adam, 0)) << what << " case " << bad;
       EXPECT_EQ(a.params, a0.params) << what << " case " << bad;
       EXPECT_EQ(a.rest_pos, a0.rest_pos) << what << " case " << bad;
       EXPECT_TRUE(adam.m.empty()) << what << " case " << bad << ": Adam's moments took the step";
     }
-    collective::Agent a = a0;
+    morph::Agent a = a0;
     evo::Adam adam;
     EXPECT_TRUE(evo::step_agent(a, gp, gr, opt, adam, 0)) << what;
     EXPECT_NE(a.params, a0.params) << what;
@@ -154,9 +155,9 @@ TEST(GdTrain, KeepBestAndAdamReturnTheCurveMaximumPaperTheLastEvaluation) {
     for (uint64_t seed : {3, 8}) {
       evo::GdOptions opt = short_opts(6, 250, rule);
       opt.adam_lr = 0.03;
-      collective::Agent a = agent(seed);
+      morph::Agent a = agent(seed);
       sim::Simulator sim;
-      const evo::TrainResult r = evo::train_agent(a, opt, sim);
+      const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
       const std::string what = std::string(evo::gd_rule_name(rule)) + " seed " + std::to_string(seed);
       ASSERT_EQ(r.status, sim::Status::ok) << what;
       ASSERT_EQ(r.curve_u.size(), 7u) << what;
@@ -179,11 +180,11 @@ TEST(GdTrain, PaperCanEndBelowItsBestWhereKeepBestCannot) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     evo::GdOptions opt = short_opts(6, 250, evo::GdRule::paper);
     opt.step = 0.5;
-    collective::Agent a = agent(seed), b = agent(seed);
+    morph::Agent a = agent(seed), b = agent(seed);
     sim::Simulator sim;
-    const evo::TrainResult rp = evo::train_agent(a, opt, sim);
+    const evo::TrainResult rp = evo::train_agent(a, opt, testing::kSpec, sim);
     opt.rule = evo::GdRule::keep_best;
-    const evo::TrainResult rk = evo::train_agent(b, opt, sim);
+    const evo::TrainResult rk = evo::train_agent(b, opt, testing::kSpec, sim);
     ASSERT_EQ(rp.curve_u, rk.curve_u) << "the rules take the same steps";
     const double best = *std::max_element(rp.curve_u.begin(), rp.curve_u.end());
     if (rp.travel_u < best) ++paper_dropped;
@@ -207,7 +208,7 @@ TEST(GdTrain, RuleNamesRoundTrip) {
 TEST(GdRestGradient, MatchesCentralDifferencesWhereTravelIsSmooth) {
   const int steps = 200;
   for (uint64_t seed : {1, 4, 6}) {
-    const collective::Agent a = agent(seed);
+    const morph::Agent a = agent(seed);
     const RestGrad rg = rest_gradient(a, steps);
     int bottom = 0;
     for (int q = 0; q < kM; ++q) bottom += a.rest_pos[2 * q + 1] == 0;
@@ -230,13 +231,13 @@ TEST(GdRestGradient, MatchesCentralDifferencesWhereTravelIsSmooth) {
 TEST(GdRestGradient, OneEpochMovesRestPositionsAlongTheGradient) {
   const int steps = 200;
   for (uint64_t seed : {1, 2, 5}) {
-    const collective::Agent a0 = agent(seed);
+    const morph::Agent a0 = agent(seed);
     evo::GdOptions opt = short_opts(1, steps, evo::GdRule::paper);
     opt.step = 0;  // weights stay put
     opt.rest_move_max = 1e-6;  // first-order regime (contacts change at ~1e-4)
-    collective::Agent a = a0;
+    morph::Agent a = a0;
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     EXPECT_EQ(a.params, a0.params);
     // expected: the mass with the largest gradient moves rest_move_max, then min x = min y = 0
@@ -261,14 +262,14 @@ TEST(GdRestGradient, OneEpochMovesRestPositionsAlongTheGradient) {
 TEST(GdRestGradient, LowestMassAloneIncludesTheLiftOfTheWholeBody) {
   const int steps = 200;
   for (uint64_t seed : {1, 2}) {
-    collective::Agent a = agent(seed);
+    morph::Agent a = agent(seed);
     // lower the first ground mass by 0.002 u and lift the body back so that it alone is at y = 0
     int q0 = -1;
     for (int q = 0; q < kM && q0 < 0; ++q)
       if (a.rest_pos[2 * q + 1] == 0) q0 = q;
     for (int q = 0; q < kM; ++q)
       if (q != q0) a.rest_pos[2 * q + 1] += 0.002;
-    collective::update_rest_lengths(a);
+    morph::update_rest_lengths(a);
     const RestGrad rg = rest_gradient(a, steps);
     const Differences d = fd_rest(a, 2 * q0 + 1, 1e-6, steps);
     // the lift of the whole body is in the gradient (without it the error is Σ∂travel/∂x0_y, order 1)
@@ -279,9 +280,9 @@ TEST(GdRestGradient, LowestMassAloneIncludesTheLiftOfTheWholeBody) {
 
 // ---- rest-position constraints ---------------------------------------------------------------------
 
-void expect_well_formed(const collective::Agent& a, const evo::GdOptions& opt, const std::string& what) {
-  collective::Agent b = a;
-  collective::update_rest_lengths(b);
+void expect_well_formed(const morph::Agent& a, const evo::GdOptions& opt, const std::string& what) {
+  morph::Agent b = a;
+  morph::update_rest_lengths(b);
   for (int s = 0; s < sim::kAgentSprings; ++s) {
     EXPECT_NEAR(a.rest_length[s], b.rest_length[s], 1e-16) << what << ": rest lengths follow the rest positions";
     EXPECT_GE(a.rest_length[s], opt.rest_length_min * 0.05) << what << " spring " << s;
@@ -296,11 +297,11 @@ TEST(GdMoveRest, RandomMovesKeepBoundsOrLeaveTheAgentAlone) {
   Rng rng = make_rng(3, 9, 0);
   int moved = 0, refused = 0;
   for (int t = 0; t < 300; ++t) {
-    collective::Agent a = agent(100 + t % 10);
+    morph::Agent a = agent(100 + t % 10);
     const double sd = (t % 3 == 0) ? 0.002 : (t % 3 == 1) ? 0.02 : 0.2;
     std::vector<double> delta(2 * kM);
     for (double& d : delta) d = normal(rng, 0.0, sd);
-    const collective::Agent before = a;
+    const morph::Agent before = a;
     if (evo::move_rest_positions(a, delta, opt)) {
       ++moved;
       expect_well_formed(a, opt, "move " + std::to_string(t));
@@ -315,7 +316,7 @@ TEST(GdMoveRest, RandomMovesKeepBoundsOrLeaveTheAgentAlone) {
 }
 
 // a uniform scaling about the origin multiplies every lattice rest length (0.05) by (1 + s·scale)
-std::vector<double> scaling(const collective::Agent& a, double s) {
+std::vector<double> scaling(const morph::Agent& a, double s) {
   std::vector<double> d(a.rest_pos);
   for (double& x : d) x *= s;
   return d;
@@ -323,7 +324,7 @@ std::vector<double> scaling(const collective::Agent& a, double s) {
 
 TEST(GdMoveRest, HalvesTheMoveUpToFourTimesThenRefuses) {
   const evo::GdOptions opt;  // rest lengths in [0.025, 0.075]
-  const collective::Agent a0 = agent(21);
+  const morph::Agent a0 = agent(21);
   for (double L : a0.rest_length) ASSERT_NEAR(L, 0.05, 1e-15);
   struct Case {
     double s;          // scaling of the proposed move
@@ -332,7 +333,7 @@ TEST(GdMoveRest, HalvesTheMoveUpToFourTimesThenRefuses) {
   // s = 0.8: ×1.8 no, ×1.4 yes; s = 3: ×1.375 at the 4th try; s = 7: ×1.4375 at the 5th (halved 4 times);
   // s = 9: ×1.5625 at the 5th, refused; s = -0.6: ×0.4 no, ×0.7 yes; s = -100: refused
   for (const Case c : {Case{0.8, 1.4}, Case{3, 1.375}, Case{7, 1.4375}, Case{9, 0}, Case{-0.6, 0.7}, Case{-100, 0}}) {
-    collective::Agent a = a0;
+    morph::Agent a = a0;
     const bool ok = evo::move_rest_positions(a, scaling(a0, c.s), opt);
     if (c.factor == 0) {
       EXPECT_FALSE(ok) << "s = " << c.s;
@@ -349,8 +350,8 @@ TEST(GdMoveRest, HalvesTheMoveUpToFourTimesThenRefuses) {
 
 TEST(GdMoveRest, ATranslationIsUndoneByTheShift) {
   const evo::GdOptions opt;
-  const collective::Agent a0 = agent(22);
-  collective::Agent a = a0;
+  const morph::Agent a0 = agent(22);
+  morph::Agent a = a0;
   std::vector<double> d(2 * kM);
   for (int q = 0; q < kM; ++q) d[2 * q] = 0.013, d[2 * q + 1] = -0.007;
   ASSERT_TRUE(evo::move_rest_positions(a, d, opt));
@@ -364,9 +365,9 @@ TEST(GdMoveRest, TrainingKeepsRestLengthsInBounds) {
   opt.rest_length_min = 0.9;
   opt.rest_length_max = 1.1;
   for (uint64_t seed : {2, 7}) {
-    collective::Agent a = agent(seed);
+    morph::Agent a = agent(seed);
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     expect_well_formed(a, opt, "seed " + std::to_string(seed));
   }
@@ -376,10 +377,10 @@ TEST(GdTrain, RestMovesOffLeavesRestPositionsBitIdentical) {
   for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::paper, evo::GdRule::adam}) {
     evo::GdOptions opt = short_opts(4, 200, rule);
     opt.rest_moves = false;
-    const collective::Agent a0 = agent(5);
-    collective::Agent a = a0;
+    const morph::Agent a0 = agent(5);
+    morph::Agent a = a0;
     sim::Simulator sim;
-    const evo::TrainResult r = evo::train_agent(a, opt, sim);
+    const evo::TrainResult r = evo::train_agent(a, opt, testing::kSpec, sim);
     ASSERT_EQ(r.status, sim::Status::ok);
     EXPECT_EQ(a.rest_pos, a0.rest_pos) << evo::gd_rule_name(rule);
     EXPECT_EQ(a.rest_length, a0.rest_length) << evo::gd_rule_name(rule);
@@ -392,13 +393,13 @@ TEST(GdTrain, RestMovesOffLeavesRestPositionsBitIdentical) {
 // ---- failures and determinism ----------------------------------------------------------------------
 
 TEST(GdTrain, NaNParamsEndWithStatusNanAndNaNFitness) {
-  collective::Agent a = agent(9);
+  morph::Agent a = agent(9);
   a.params[17] = std::numeric_limits<double>::quiet_NaN();
-  const collective::Agent before = a;
+  const morph::Agent before = a;
   sim::Simulator sim;
   evo::TrainResult r;
   for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::paper, evo::GdRule::adam}) {
-    ASSERT_NO_THROW(r = evo::train_agent(a, short_opts(3, 200, rule), sim));
+    ASSERT_NO_THROW(r = evo::train_agent(a, short_opts(3, 200, rule), testing::kSpec, sim));
     EXPECT_EQ(r.status, sim::Status::nan) << evo::gd_rule_name(rule);
     EXPECT_TRUE(std::isnan(r.travel_u));
     EXPECT_TRUE(std::isnan(r.fitness_bl));
@@ -413,8 +414,8 @@ TEST(GdTrain, NaNParamsEndWithStatusNanAndNaNFitness) {
     EXPECT_EQ(a.rest_pos, before.rest_pos);
   }
   // the same simulator then trains a healthy agent normally, and its parameters stay finite
-  collective::Agent b = agent(9);
-  r = evo::train_agent(b, short_opts(3, 200), sim);
+  morph::Agent b = agent(9);
+  r = evo::train_agent(b, short_opts(3, 200), testing::kSpec, sim);
   EXPECT_EQ(r.status, sim::Status::ok);
   EXPECT_TRUE(std::isfinite(r.fitness_bl));
   for (double w : b.params) ASSERT_TRUE(std::isfinite(w));
@@ -424,13 +425,13 @@ TEST(GdTrain, NaNParamsEndWithStatusNanAndNaNFitness) {
 TEST(GdTrain, SameAgentTwoSimulatorsBitIdentical) {
   for (evo::GdRule rule : {evo::GdRule::keep_best, evo::GdRule::adam}) {
     const evo::GdOptions opt = short_opts(4, 250, rule);
-    collective::Agent a = agent(11), b = agent(11);
+    morph::Agent a = agent(11), b = agent(11);
     sim::Simulator s1, s2;
     // s2 first runs something else, so its workspace is not fresh
-    collective::Agent other = agent(12);
-    evo::train_agent(other, short_opts(1, 300), s2);
-    const evo::TrainResult ra = evo::train_agent(a, opt, s1);
-    const evo::TrainResult rb = evo::train_agent(b, opt, s2);
+    morph::Agent other = agent(12);
+    evo::train_agent(other, short_opts(1, 300), testing::kSpec, s2);
+    const evo::TrainResult ra = evo::train_agent(a, opt, testing::kSpec, s1);
+    const evo::TrainResult rb = evo::train_agent(b, opt, testing::kSpec, s2);
     EXPECT_EQ(a.params, b.params);
     EXPECT_EQ(a.rest_pos, b.rest_pos);
     EXPECT_EQ(a.rest_length, b.rest_length);

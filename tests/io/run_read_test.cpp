@@ -115,7 +115,7 @@ TEST(ReadAnchors, RowsSetOnTheAgentsAndAnotherPopulationRefused) {
     f.write_string("format", run_file::kFormat);
     const std::vector<int32_t> an = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
     f.write_rows<int32_t>("connectors/anchors", {3, 4}, {0, 1, 2}, an);
-    std::vector<collective::Agent> three(3), four(4);
+    std::vector<morph::Agent> three(3), four(4);
     read_anchors(f, "connectors/anchors", three);
     EXPECT_EQ(three[2].anchors.back_foot, 8);
     EXPECT_EQ(three[2].anchors.front_upper, 11);

@@ -257,14 +257,18 @@ TEST(BodyGeometry, FreshBodyIsTheLattice) {
   Rng rng(6);
   for (int t = 0; t < 200; ++t) {
     const Body body = random_genotype(rng);
-    const AgentGeometry g = agent_geometry(body);
-    ASSERT_EQ(g.cell.size(), 11u);
+    const Agent g = agent_geometry(body);
+    const std::vector<int32_t> cell = mass_cells(body.cells);
+    ASSERT_EQ(cell.size(), 11u);
+    EXPECT_EQ(g.cells, body.cells);
+    EXPECT_EQ(g.springs, body.springs);
+    EXPECT_TRUE(g.params.empty());
     ASSERT_EQ(g.rest_pos.size(), 22u);
     ASSERT_EQ(g.spring_i.size(), 21u);
     ASSERT_EQ(g.spring_j.size(), 21u);
     ASSERT_EQ(g.rest_length.size(), 21u);
     ASSERT_EQ(g.amplitude.size(), 21u);
-    EXPECT_TRUE(std::is_sorted(g.cell.begin(), g.cell.end()));
+    EXPECT_TRUE(std::is_sorted(cell.begin(), cell.end()));
 
     // min x = min y = 0
     double min_x = 1, min_y = 1;
@@ -282,7 +286,7 @@ TEST(BodyGeometry, FreshBodyIsTheLattice) {
         EXPECT_LT(std::make_pair(g.spring_i[s - 1], g.spring_j[s - 1]),
                   std::make_pair(g.spring_i[s], g.spring_j[s]));
       }
-      EXPECT_TRUE(adjacent(g.cell[g.spring_i[s]], g.cell[g.spring_j[s]]));
+      EXPECT_TRUE(adjacent(cell[g.spring_i[s]], cell[g.spring_j[s]]));
       EXPECT_NEAR(g.rest_length[s], 0.05, 1e-12);
       EXPECT_EQ(g.amplitude[s], (body.springs >> s & 1) ? kActiveAmplitude : 0.0);
     }
@@ -297,7 +301,7 @@ TEST(BodyGeometry, RefusesInvalidGenotypes) {
 }
 
 TEST(BodyGeometry, RestLengthsFollowMovedPositions) {
-  AgentGeometry g = agent_geometry(all_valid_placements().front(), 1);
+  Agent g = agent_geometry(all_valid_placements().front(), 1);
   g.rest_pos[0] += 0.003;
   update_rest_lengths(g);
   for (int s = 0; s < 21; ++s) {

@@ -12,8 +12,8 @@ namespace divcoll::morph {
 namespace {
 
 // a geometry with the given rest positions (u) and no springs
-AgentGeometry points(std::vector<double> pos) {
-  AgentGeometry g;
+Agent points(std::vector<double> pos) {
+  Agent g;
   g.rest_pos = std::move(pos);
   return g;
 }
@@ -52,7 +52,7 @@ TEST(Descriptor, KnownShape) {
 TEST(Descriptor, SymmetricBodyHasVerticalSymmetryOne) {
   // a lattice trapezoid symmetric about x = 0.075: 4 at the bottom, 3 above, 2 above that
   const double r = 0.05 * std::sqrt(3.0) / 2;
-  const AgentGeometry g =
+  const Agent g =
       points({0, 0, 0.05, 0, 0.1, 0, 0.15, 0, 0.025, r, 0.075, r, 0.125, r, 0.05, 2 * r, 0.1, 2 * r});
   const Descriptor d = descriptor(g);
   EXPECT_EQ(d[7], 1.0);
@@ -61,7 +61,7 @@ TEST(Descriptor, SymmetricBodyHasVerticalSymmetryOne) {
   EXPECT_NEAR(d[8], 7.0 / 9.0, 1e-12);
 
   // moving one mass by 0.02 u breaks its pair (and the mirror of its partner)
-  AgentGeometry moved = g;
+  Agent moved = g;
   moved.rest_pos[2 * 4 + 1] += 0.02;
   EXPECT_LT(descriptor(moved)[7], 1.0);
   // moving it by less than the tolerance keeps it
@@ -71,8 +71,8 @@ TEST(Descriptor, SymmetricBodyHasVerticalSymmetryOne) {
 
 TEST(Descriptor, MirrorImageSwapsTheCentroid) {
   for (uint32_t b : all_valid_bodies_up_to_translation()) {
-    const AgentGeometry g = agent_geometry(b, kSpringMask);
-    AgentGeometry m = g;
+    const Agent g = agent_geometry(b, kSpringMask);
+    Agent m = g;
     double max_x = 0;
     for (int k = 0; k < 11; ++k) max_x = std::max(max_x, g.rest_pos[2 * k]);
     for (int k = 0; k < 11; ++k) m.rest_pos[2 * k] = max_x - g.rest_pos[2 * k];

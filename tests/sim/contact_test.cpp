@@ -1,13 +1,15 @@
 // the contact laws (src/sim/contact.cpp, src/MODEL.md "Contact laws"): what no_slip does to a whole episode
 // (a mass in contact moves with the ground: at rest on still ground, with the belt on the treadmill; no mass
-// ends below the floor), that the law is a property of the scene stamped by io::set_contact_law, that the
-// environments' kappa_ns is the documented re-reading, and that coulomb ignores kappa_ns. Gradients are in
-// gradient_test.cpp and stages_test.cpp.
+// ends below the floor), that the law is a property of the scene given to whatever builds it and reaches the
+// engine from there (nothing process-wide: scenes of both laws in one process), that the environments' kappa_ns
+// is the documented re-reading, and that coulomb ignores kappa_ns. Gradients are in gradient_test.cpp and
+// stages_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "collective/builders.hpp"
+#include "collective/pairs.hpp"
 #include "config/environments.hpp"
 #include "sim/engine.hpp"
 #include "testing.hpp"
@@ -20,11 +22,10 @@ constexpr int kSteps = 300;
 // the pair of the gradient tests in `env` under `law`, its features just ahead of its front
 sim::Scene pair_in(const std::string& env, sim::ContactLaw law) {
   const testing::GradientPair& f = testing::gradient_pair();
-  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, law);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx - 0.047);
-  s.env.contact = law;
+  s.env = io::place_environment(io::environment_table(env), mx - 0.047, law);
   return s;
 }
 
@@ -102,17 +103,63 @@ TEST(NoSlip, NoMassEndsBelowTheFloor) {
     }
 }
 
-// the law travels with the scene: place_environment stamps io::contact_law(), coulomb until set
-TEST(NoSlip, PlacedEnvironmentsCarryTheProcessLaw) {
-  ASSERT_EQ(io::contact_law(), sim::ContactLaw::coulomb);
-  EXPECT_EQ(io::place_environment(io::environment_table("flat"), 0.3).contact, sim::ContactLaw::coulomb);
-  io::set_contact_law(sim::ContactLaw::no_slip);
-  const sim::Environment e = io::place_environment(io::environment_table("ice"), 0.3);
-  const sim::Scene s = collective::agent_scene(testing::gradient_pair().p, "sand");
-  io::set_contact_law(sim::ContactLaw::coulomb);
-  EXPECT_EQ(e.contact, sim::ContactLaw::no_slip);
-  EXPECT_EQ(s.env.contact, sim::ContactLaw::no_slip);
-  EXPECT_EQ(io::place_environment(io::environment_table("ice"), 0.3).contact, sim::ContactLaw::coulomb);
+// the law travels with the scene: every builder stamps the law it is given, whatever was built before it
+TEST(NoSlip, ScenesCarryTheLawTheyAreGiven) {
+  const testing::GradientPair& f = testing::gradient_pair();
+  const std::vector<const morph::Agent*> chain = {&f.p, &f.a, &f.p};
+  for (int round = 0; round < 2; ++round)  // the other law built in between: nothing carries over
+    for (sim::ContactLaw law : {sim::ContactLaw::no_slip, sim::ContactLaw::coulomb}) {
+      SCOPED_TRACE(sim::contact_law_name(law));
+      EXPECT_EQ(io::place_environment(io::environment_table("ice"), 0.3, law).contact, law);
+      EXPECT_EQ(collective::agent_scene(f.p, "sand", law).env.contact, law);
+      EXPECT_EQ(collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat", law).env.contact, law);
+      EXPECT_EQ(collective::chain_scene(chain, f.conn, testing::weak_connector(), "ice", law).env.contact, law);
+    }
+}
+
+// the law a scene is built with is the law the engine runs: a pair built no_slip runs bit for bit as the same
+// scene with its environment's law set to no_slip by hand, and not as the coulomb one; scenes of the two laws
+// alternate in one simulator (and the collective runners, given the law, run the same episodes)
+TEST(NoSlip, TheLawASceneIsBuiltWithReachesTheEngine) {
+  const testing::GradientPair& f = testing::gradient_pair();
+  const sim::Scene coulomb = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                    sim::ContactLaw::coulomb);
+  const sim::Scene no_slip = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                    sim::ContactLaw::no_slip);
+  sim::Scene by_hand = coulomb;
+  by_hand.env.contact = sim::ContactLaw::no_slip;
+  sim::RunOptions opt;
+  opt.steps = 200;
+  opt.grad = true;
+  sim::Simulator sim;
+  const sim::RunResult n1 = sim.run(no_slip, opt), c1 = sim.run(coulomb, opt), n2 = sim.run(no_slip, opt);
+  const sim::RunResult ref = sim::simulate(by_hand, opt), cref = sim::simulate(coulomb, opt);
+  ASSERT_EQ(ref.status, sim::Status::ok) << ref.message;
+  EXPECT_EQ(n1.travel, ref.travel);
+  EXPECT_EQ(n1.grad_connector_params, ref.grad_connector_params);
+  EXPECT_EQ(n2.travel, ref.travel);
+  EXPECT_EQ(c1.travel, cref.travel);
+  EXPECT_NE(n1.travel, c1.travel);
+  EXPECT_GT(ref.contacts.floor, 0);
+
+  // the runners: a pair's and an agent's episodes under RunPhysics{no_slip}, then {coulomb}
+  const sim::RunPhysics ns{sim::ContactLaw::no_slip, false};
+  const collective::PairOutcome pn = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                          ns, 200, true);
+  const collective::PairOutcome pc = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                          testing::kSpec, 200, true);
+  sim::RunOptions frozen = opt;
+  frozen.agent_param_grad = false;
+  EXPECT_EQ(pn.travel_u, sim::simulate(by_hand, frozen).travel);
+  EXPECT_EQ(pn.grad, sim::simulate(by_hand, frozen).grad_connector_params);
+  EXPECT_EQ(pc.travel_u, cref.travel);
+  sim::Scene alone = collective::agent_scene(f.p, "flat", sim::ContactLaw::coulomb);
+  alone.env.contact = sim::ContactLaw::no_slip;
+  sim::RunOptions fwd;
+  fwd.steps = 200;
+  EXPECT_EQ(collective::run_alone(sim, f.p, "flat", ns, 200).travel_u, sim::simulate(alone, fwd).travel);
+  EXPECT_NE(collective::run_alone(sim, f.p, "flat", ns, 200).travel_u,
+            collective::run_alone(sim, f.p, "flat", testing::kSpec, 200).travel_u);
 }
 
 // the re-reading of the paper's friction f as kappa_ns = max(0, 1 − 1/f): ice 1.5 → 1/3, every other

@@ -14,7 +14,7 @@
 namespace divcoll {
 namespace {
 
-collective::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed, 3); }
+morph::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed, 3); }
 
 std::vector<double> make_conn(uint64_t seed) {
   Rng rng = make_rng(seed, 4, 0);
@@ -29,7 +29,7 @@ sim::Scene free_masses(int n) {
     s.x0.push_back(10.0 + 0.01 * i);
     s.mass.push_back(1.0);
   }
-  s.env = io::place_environment(io::environment_table("flat"), 1.0);
+  s.env = io::place_environment(io::environment_table("flat"), 1.0, testing::kCoulomb);
   return s;
 }
 
@@ -54,8 +54,8 @@ TEST(Engine, FreeFallMatchesClosedForm) {
 }
 
 TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
-  const collective::Agent a = make_agent(1), b = make_agent(2);
-  sim::Scene s = collective::pair_scene(a, b, make_conn(1), collective::kWeakConnector, "flat");
+  const morph::Agent a = make_agent(1), b = make_agent(2);
+  sim::Scene s = collective::pair_scene(a, b, make_conn(1), testing::weak_connector(), "flat", testing::kCoulomb);
   s.env.gravity = 0;
   s.env.damping = 0;
   s.env.terrain = {sim::Segment{-1e9, -50, 0}};  // the ground is far below
@@ -81,9 +81,9 @@ TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
 }
 
 TEST(Engine, DampingRemovesEnergyFromPassiveBody) {
-  collective::Agent a = make_agent(3);
+  morph::Agent a = make_agent(3);
   for (double& amp : a.amplitude) amp = 0;  // passive
-  sim::Scene s = collective::agent_scene(a, "flat");
+  sim::Scene s = collective::agent_scene(a, "flat", testing::kCoulomb);
   s.env.gravity = 0;
   s.env.terrain = {sim::Segment{-1e9, -50, 0}};
   // stretch the body: scale the initial positions by 1.2
@@ -144,13 +144,13 @@ TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
   const bool features = io::environment_table(GetParam()).relative.size() > 0;
   const double allowed = features ? 5e-3 : 1e-9;  // u
   for (uint64_t seed = 0; seed < 3; ++seed) {
-    const collective::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
+    const morph::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
     std::vector<double> conn = make_conn(seed);
     for (double& w : conn) w *= 3.0;  // vigorous actuation
-    sim::Scene s = collective::pair_scene(a, b, conn, collective::kWeakConnector, GetParam());
+    sim::Scene s = collective::pair_scene(a, b, conn, testing::weak_connector(), GetParam(), testing::kCoulomb);
     double mx = -1e9;
     for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-    s.env = io::place_environment(io::environment_table(GetParam()), mx - 0.047);
+    s.env = io::place_environment(io::environment_table(GetParam()), mx - 0.047, testing::kCoulomb);
     sim::RunOptions opt;
     opt.steps = 2000;
     opt.record = true;
@@ -180,8 +180,8 @@ INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(io
                          [](const auto& info) { return info.param; });
 
 TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
-  const collective::Agent a = make_agent(4), b = make_agent(5);
-  const sim::Scene s = collective::pair_scene(a, b, make_conn(4), collective::kWeakConnector, "gap");
+  const morph::Agent a = make_agent(4), b = make_agent(5);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(4), testing::weak_connector(), "gap", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 300;
   opt.record = true;
@@ -193,8 +193,8 @@ TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
 }
 
 TEST(Engine, StrongConnectorPairIsSubsteppedAndFinite) {
-  const collective::Agent a = make_agent(6), b = make_agent(7);
-  const sim::Scene s = collective::pair_scene(a, b, make_conn(6), collective::kStrongConnector, "flat");
+  const morph::Agent a = make_agent(6), b = make_agent(7);
+  const sim::Scene s = collective::pair_scene(a, b, make_conn(6), testing::strong_connector(), "flat", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 1000;
   opt.grad = true;
@@ -234,12 +234,12 @@ TEST(Engine, StiffSceneIsSubsteppedAutomaticallyOrRefusedWhenItForbidsSubsteps) 
 }
 
 TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
-  std::vector<collective::Agent> agents;
+  std::vector<morph::Agent> agents;
   for (int q = 0; q < 20; ++q) agents.push_back(make_agent(100 + q));
-  std::vector<const collective::Agent*> ptr;
+  std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   for (const std::string& env : io::environment_names()) {
-    const sim::Scene s = collective::chain_scene(ptr, make_conn(9), collective::kWeakConnector, env);
+    const sim::Scene s = collective::chain_scene(ptr, make_conn(9), testing::weak_connector(), env, testing::kCoulomb);
     sim::RunOptions opt;
     opt.steps = 500;
     const sim::RunResult r = sim::simulate(s, opt);
@@ -249,7 +249,7 @@ TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
 }
 
 TEST(Engine, BodyDroppedFromOneUnitOntoAStepEdgeStaysFinite) {
-  sim::Scene s = collective::agent_scene(make_agent(8), "flat");
+  sim::Scene s = collective::agent_scene(make_agent(8), "flat", testing::kCoulomb);
   // a step whose edge is under the body's middle, the body 1 u above it
   double cx = 0;
   for (int i = 0; i < s.n_masses(); ++i) cx += s.x0[2 * i] / s.n_masses();
@@ -285,12 +285,12 @@ TEST(Engine, SpringOfNearZeroLengthStaysFinite) {
 }
 
 TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
-  const collective::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
+  const morph::Agent a = make_agent(30), b = make_agent(31), c = make_agent(32);
   const std::vector<double> conn = make_conn(30);
   std::vector<sim::Scene> batch = {
-      collective::pair_scene(a, b, conn, collective::kWeakConnector, "flat"),
-      collective::pair_scene(b, c, conn, collective::kWeakConnector, "flat"),
-      collective::pair_scene(c, a, conn, collective::kWeakConnector, "flat"),
+      collective::pair_scene(a, b, conn, testing::weak_connector(), "flat", testing::kCoulomb),
+      collective::pair_scene(b, c, conn, testing::weak_connector(), "flat", testing::kCoulomb),
+      collective::pair_scene(c, a, conn, testing::weak_connector(), "flat", testing::kCoulomb),
   };
   batch[1].agent_params[100] = std::nan("");
   sim::RunOptions opt;
@@ -316,7 +316,7 @@ TEST(Engine, NanInOneControllerEndsOnlyThatEpisode) {
 // touch flags are 0 and every spring is at its rest length (ℓ/L = 1 up to ε)
 TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
   const testing::GradientPair& f = testing::gradient_pair();
-  const sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, "flat");
+  const sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat", testing::kCoulomb);
   sim::RunOptions opt;
   opt.steps = 60;
   opt.record_hidden = true;
@@ -344,9 +344,9 @@ TEST(Engine, RecordedConnectorInputsSitBesideTheHiddenStates) {
 }
 
 TEST(Engine, BatchOfDifferentShapesIsRefused) {
-  const collective::Agent a = make_agent(40), b = make_agent(41);
-  std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat"),
-                                   collective::pair_scene(a, b, make_conn(40), collective::kWeakConnector, "flat")};
+  const morph::Agent a = make_agent(40), b = make_agent(41);
+  std::vector<sim::Scene> batch = {collective::agent_scene(a, "flat", testing::kCoulomb),
+                                   collective::pair_scene(a, b, make_conn(40), testing::weak_connector(), "flat", testing::kCoulomb)};
   sim::Simulator sim;
   EXPECT_THROW(sim.run_batch(batch, sim::RunOptions{}), InputError);
 }

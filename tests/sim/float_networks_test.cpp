@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "collective/builders.hpp"
+#include "collective/pairs.hpp"
 #include "config/environments.hpp"
 #include "io/scene_file.hpp"
 #include "sim/engine.hpp"
@@ -27,7 +28,7 @@ std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_di
 
 sim::Scene pair_in(const std::string& env) {
   const testing::GradientPair& f = testing::gradient_pair();
-  return collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
+  return collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, testing::kCoulomb);
 }
 
 sim::RunResult run(const sim::Scene& s, bool grad, bool fl, int steps = kSteps) {
@@ -109,6 +110,44 @@ TEST(FloatNetworksDeterminism, TapedUntapedAndRepeatedRunsGiveTheSameBits) {
                         sizeof(double) * b.grad_connector_params.size()),
             0);
   EXPECT_FALSE(b.redone_in_double) << "an ordinary pair's float gradient is finite";
+}
+
+// the precision is the caller's to give (sim::RunPhysics, from run.precision): RunPhysics::options() and the
+// collective runners given it run the networks in float, bit for bit as RunOptions::float_networks does, and
+// episodes of both precisions alternate on one simulator (nothing process-wide: RunOptions defaults to double)
+TEST(FloatNetworksDeterminism, ThePrecisionGivenReachesTheEngine) {
+  EXPECT_FALSE(sim::RunOptions{}.float_networks);
+  const sim::RunPhysics fl{sim::ContactLaw::coulomb, true};
+  EXPECT_TRUE(fl.options().float_networks);
+  EXPECT_FALSE(testing::kSpec.options().float_networks);
+  const testing::GradientPair& f = testing::gradient_pair();
+  const sim::Scene s = pair_in("flat");
+  sim::RunOptions opt;
+  opt.steps = 200;
+  opt.grad = true;
+  opt.agent_param_grad = false;
+  const sim::RunResult d = sim::simulate(s, opt);
+  opt.float_networks = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok);
+  ASSERT_NE(r.travel, d.travel) << "float and double agree to the bit: the test cannot tell them apart";
+  sim::Simulator sim;
+  for (int round = 0; round < 2; ++round) {
+    const collective::PairOutcome pf = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                            fl, 200, true);
+    const collective::PairOutcome pd = collective::run_pair(sim, f.p, f.a, f.conn, testing::weak_connector(), "flat",
+                                                            testing::kSpec, 200, true);
+    EXPECT_EQ(pf.travel_u, r.travel);
+    EXPECT_EQ(pf.grad, r.grad_connector_params);
+    EXPECT_EQ(pd.travel_u, d.travel);
+    EXPECT_EQ(pd.grad, d.grad_connector_params);
+  }
+  // an agent alone and its training: float given, float run
+  sim::RunOptions fwd = fl.options();
+  fwd.steps = 200;
+  const double alone_f = sim::simulate(collective::agent_scene(f.p, "flat", sim::ContactLaw::coulomb), fwd).travel;
+  EXPECT_EQ(collective::run_alone(sim, f.p, "flat", fl, 200).travel_u, alone_f);
+  EXPECT_NE(collective::run_alone(sim, f.p, "flat", testing::kSpec, 200).travel_u, alone_f);
 }
 
 // float's range ends at 3.4e38. The scene: the float paper run's connectors stage rerun (postprocess/RESULTS.md, 3b8fa66),

@@ -27,10 +27,10 @@ std::vector<double> direction(size_t n, uint64_t seed) { return testing::unit_di
 // hit early
 sim::Scene pair_in(const std::string& env, double back = 0.047) {
   const testing::GradientPair& f = testing::gradient_pair();
-  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, collective::kWeakConnector, env);
+  sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, testing::kCoulomb);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx - back);
+  s.env = io::place_environment(io::environment_table(env), mx - back, testing::kCoulomb);
   return s;
 }
 
@@ -170,7 +170,7 @@ void check_landing(sim::Scene s, const std::string& label) {
 
 // a body dropped from above lands through the time of impact
 TEST(Gradient, LandingThroughTimeOfImpact) {
-  check_landing(collective::agent_scene(testing::gradient_pair().p, "flat"), "coulomb");
+  check_landing(collective::agent_scene(testing::gradient_pair().p, "flat", testing::kCoulomb), "coulomb");
 }
 
 // ---- the no_slip contact law (run.contact = "no_slip", src/MODEL.md "Contact laws") ----------------------
@@ -235,7 +235,7 @@ INSTANTIATE_TEST_SUITE_P(Environments, NoSlipGradient,
 // time of impact matches finite differences
 TEST(NoSlipGradient, LandingThroughTimeOfImpact) {
   for (double keep : {0.0, 0.5})
-    check_landing(no_slip(collective::agent_scene(testing::gradient_pair().p, "flat"), keep),
+    check_landing(no_slip(collective::agent_scene(testing::gradient_pair().p, "flat", testing::kCoulomb), keep),
                   "kappa_ns " + std::to_string(keep));
 }
 

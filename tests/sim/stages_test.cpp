@@ -13,6 +13,7 @@
 #include "morph/body.hpp"
 #include "sim/model.hpp"
 #include "sim/stages.hpp"
+#include "testing.hpp"
 
 namespace divcoll {
 namespace {
@@ -28,13 +29,13 @@ struct StageState {
 
 StageState make_state(uint64_t seed) {
   Rng rng = make_rng(seed, 3, 0);
-  collective::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
-  p.anchors = collective::compute_anchors(p, {}, 100);
-  a.anchors = collective::compute_anchors(a, {}, 100);
+  morph::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
+  p.anchors = collective::compute_anchors(p, testing::kSpec, {}, 100);
+  a.anchors = collective::compute_anchors(a, testing::kSpec, {}, 100);
   Vec conn = morph::init_connector_params(rng);
   for (double& w : conn) w += 0.05 * normal(rng);  // nonzero biases: every term matters
   StageState s;
-  s.scene = collective::pair_scene(p, a, conn, collective::kWeakConnector, "flat");
+  s.scene = collective::pair_scene(p, a, conn, testing::weak_connector(), "flat", testing::kCoulomb);
   for (double& c : s.scene.damping) c = 5.0 + uniform01(rng);
   s.scene.env.wind_amp = 1.5;
   s.scene.env.adhesion = 2.0;

@@ -104,8 +104,8 @@ TEST(AgentsPlan, GenerationZeroIsEachRandomAgentTrainedByGradientDescent) {
   const size_t Pa = test::at(d, "agents/gen_000/params").dims[1];
   for (int i = 0; i < cfg.agents.population; ++i) {
     Rng rng = make_rng(cfg.run.seed, kAgentsStage, static_cast<uint64_t>(i));
-    collective::Agent a = collective::random_agent(rng);
-    const evo::TrainResult t = evo::train_agent(a, gd, sim);
+    morph::Agent a = collective::random_agent(rng);
+    const evo::TrainResult t = evo::train_agent(a, gd, sim::RunPhysics{}, sim);
     EXPECT_TRUE(test::same_bits(test::at(d, "agents/gen_000/fitness").values[i], t.fitness_bl)) << i;
     EXPECT_TRUE(test::same_bits(test::at(d, "agents/gen_000/travel_u").values[i], t.travel_u)) << i;
     EXPECT_EQ(test::at(d, "agents/gen_000/cells").values[i], a.cells) << i;
@@ -153,7 +153,7 @@ TEST(AgentsPlan, AResumeFromACommittedGenerationContinuesAsAnUninterruptedRun) {
 TEST(AgentsPlan, AFixedBodyAndSpringsReachEveryAgentOfGenerationZero) {
   const io::RunConfig cfg = config();
   Rng rng = make_rng(5, 5, 5);
-  const collective::Agent body = collective::random_agent(rng);
+  const morph::Agent body = collective::random_agent(rng);
   AgentsSpec spec;
   spec.group = "graded/x/agents";
   spec.stream = 777;

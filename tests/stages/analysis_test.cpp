@@ -17,7 +17,7 @@ struct Case {
                                   "deploy.hidden_subsample=60", "connectors.kinds=weak_uniform,weak_diverse",
                                   "connectors.replicates=2", "analysis.max_states=40",
                                   "analysis.bootstrap_resamples=100"});
-  std::vector<collective::Agent> agents = test::random_population(4);
+  std::vector<morph::Agent> agents = test::random_population(4);
   std::array<std::vector<std::vector<double>>, 2> weights;  // [type] per replicate
   test::Datasets deployed;
   Case() {

@@ -14,7 +14,7 @@ namespace {
 
 struct Case {
   io::RunConfig cfg;
-  std::vector<collective::Agent> agents = test::random_population(4);
+  std::vector<morph::Agent> agents = test::random_population(4);
   std::vector<ConnectorSlot> slots;
   TrainSpec spec;
   explicit Case(std::vector<std::string> overrides) {
@@ -75,7 +75,7 @@ TEST(ConnectorsPlan, TheFirstIterationsCurveIsTheMeanOfItsPairEpisodes) {
                                     : collective::uniform_pairs(c.spec.batch_pairs);
     collective::ProbeSum sum;
     for (const auto& [a, b] : pairs)
-      sum.add(collective::run_pair(sim, c.agents[a], c.agents[b], w, slot.tether, "flat", ro, nullptr));
+      sum.add(collective::run_pair(sim, c.agents[a], c.agents[b], w, slot.tether, "flat", sim::ContactLaw::coulomb, ro, nullptr));
     const double want = sum.mean().travel_u;
     EXPECT_EQ(test::at(d, slot.group + "/curve_u").values[slot.column], want) << slot.group << " " << slot.column;
   }

@@ -15,7 +15,7 @@ struct Case {
   io::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "deploy.episode_steps=80", "deploy.pairs=3",
                                   "deploy.early_step=20", "deploy.hidden_subsample=30",
                                   "connectors.kinds=weak_uniform,weak_diverse"});
-  std::vector<collective::Agent> agents = test::random_population(4);
+  std::vector<morph::Agent> agents = test::random_population(4);
   DeployTypes types() const {
     DeployTypes t;
     for (const std::string& kind : cfg.connectors.kinds) {
@@ -67,7 +67,7 @@ TEST(DeployPlan, EachEpisodeIsTheDirectSimulationOfItsAgentOrPair) {
     const std::string& env = c.cfg.deploy.environments[e];
     for (int i = 0; i < 4; ++i) {
       sim::RunResult full;
-      const auto o = collective::run_alone(sim, c.agents[i], env, opt, &full,
+      const auto o = collective::run_alone(sim, c.agents[i], env, sim::ContactLaw::coulomb, opt, &full,
                                            collective::alone_feature_offset(c.cfg, c.agents[i]));
       EXPECT_TRUE(test::same_bits(test::at(d, "deploy/agents/travel_u").values[e * 4 + i], o.travel_u)) << env << i;
     }
@@ -76,7 +76,7 @@ TEST(DeployPlan, EachEpisodeIsTheDirectSimulationOfItsAgentOrPair) {
         const int a = types.diverse[t] ? static_cast<int>(pairs[2 * q]) : uniform[q].first;
         const int b = types.diverse[t] ? static_cast<int>(pairs[2 * q + 1]) : uniform[q].second;
         const auto o = collective::run_pair(sim, c.agents[a], c.agents[b], types.weights[t][0], types.tethers[t], env,
-                                            opt, nullptr);
+                                            sim::ContactLaw::coulomb, opt, nullptr);
         EXPECT_TRUE(test::same_bits(test::at(d, "deploy/collectives/travel_u").values[(e * 4 + t) * 3 + q], o.travel_u))
             << env << " " << types.names[t] << " " << q;
       }

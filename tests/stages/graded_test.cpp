@@ -34,7 +34,7 @@ TEST(Graded, ThePopulationsEvolveOneBodyAndTheSecondOneSpringGenotypeWithoutEvol
   const io::RunConfig cfg = test::tiny({"agents.episode_steps=40", "agents.epochs=1", "graded.population=3",
                                         "agents.uniqueness_k=2"});
   Rng rng = make_rng(8, 8, 8);
-  const collective::Agent body = collective::random_agent(rng);
+  const morph::Agent body = collective::random_agent(rng);
   const GradedShape shape{body.cells, body.springs};
   const auto [def0, spec0] = graded_agents(cfg, 0, shape);
   EXPECT_EQ(spec0.group, "graded/same_shape/agents");
@@ -60,7 +60,7 @@ TEST(Graded, ThePopulationsEvolveOneBodyAndTheSecondOneSpringGenotypeWithoutEvol
 TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
   const io::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
                                         "graded.population=3", "connectors.replicates=1", "agents.uniqueness_k=2"});
-  const std::vector<collective::Agent> agents = test::random_population(3, 9);
+  const std::vector<morph::Agent> agents = test::random_population(3, 9);
   Rng wr = make_rng(2, 2, 2);
   const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr)};
   const std::vector<std::pair<int, int>> pairs = {{0, 2}, {1, 0}};
@@ -75,12 +75,12 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
     const std::string& env = cfg.deploy.environments[e];
     for (int i = 0; i < 3; ++i)
       EXPECT_TRUE(test::same_bits(test::at(d, "graded/same_shape/deploy/agents/travel_u").values[e * 3 + i],
-                                  collective::run_alone(sim, agents[i], env, cfg.deploy.episode_steps).travel_u));
+                                  collective::run_alone(sim, agents[i], env, sim::RunPhysics{}, cfg.deploy.episode_steps).travel_u));
     for (int q = 0; q < 2; ++q)
       EXPECT_TRUE(test::same_bits(
           test::at(d, "graded/same_shape/deploy/pairs/travel_u").values[e * 2 + q],
           collective::run_pair(sim, agents[pairs[q].first], agents[pairs[q].second], weights[0],
-                               collective::tether(cfg, "weak_diverse"), env, cfg.deploy.episode_steps, false)
+                               collective::tether(cfg, "weak_diverse"), env, sim::RunPhysics{}, cfg.deploy.episode_steps, false)
               .travel_u));
   }
   SerialOptions o;

@@ -16,7 +16,7 @@ namespace {
 struct Case {
   io::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "scaling.sizes=2,3", "scaling.draws=2",
                                   "scaling.episode_steps=60", "connectors.replicates=1"});
-  std::vector<collective::Agent> agents = test::random_population(4);
+  std::vector<morph::Agent> agents = test::random_population(4);
   std::vector<std::vector<double>> weights;  // weak uniform-trained, then weak diverse-trained
   Case() {
     for (uint64_t k = 0; k < 2; ++k) {
@@ -57,11 +57,11 @@ TEST(ScalingPlan, EachChainIsTheDirectSimulationOfItsAgents) {
       const Dataset& chains = test::at(d, "scaling/n" + std::to_string(n) + "/diverse_agents");
       for (int v = 0; v < 2; ++v)
         for (int q = 0; q < 2; ++q) {
-          std::vector<const collective::Agent*> chain;
+          std::vector<const morph::Agent*> chain;
           for (int k = 0; k < n; ++k)
             chain.push_back(&c.agents[v == 0 ? q : static_cast<int>(chains.values[q * n + k])]);  // uniform: clones of `draw`
           const auto o = collective::run_chain(sim, chain, c.weights[v], tether, c.cfg.deploy.environments[e],
-                                               c.cfg.scaling.episode_steps);
+                                               sim::RunPhysics{}, c.cfg.scaling.episode_steps);
           const size_t at = ((static_cast<size_t>(e) * 2 + si) * 2 + v) * 2 + q;
           EXPECT_TRUE(test::same_bits(test::at(d, "scaling/travel_u").values[at], o.travel_u)) << e << si << v << q;
         }

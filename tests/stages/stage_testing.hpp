@@ -28,12 +28,12 @@ inline io::RunConfig tiny(const std::vector<std::string>& overrides = {}) {
 }
 
 // n random agents with their anchors (computed, as load_population does before the connectors stage stores them)
-inline std::vector<collective::Agent> random_population(int n, uint64_t seed = 7) {
-  std::vector<collective::Agent> out;
+inline std::vector<morph::Agent> random_population(int n, uint64_t seed = 7) {
+  std::vector<morph::Agent> out;
   for (int i = 0; i < n; ++i) {
     Rng rng = make_rng(seed, 99, static_cast<uint64_t>(i));
     out.push_back(collective::random_agent(rng));
-    out.back().anchors = collective::compute_anchors(out.back());
+    out.back().anchors = collective::compute_anchors(out.back(), sim::RunPhysics{});
   }
   return out;
 }
