@@ -1,6 +1,6 @@
 // divcoll connector-opt: one connector training per kind and replicate with every [connectors] key (optimizer,
 // schedule, keep-best, truncated backpropagation, gradient averaging, CMA-ES), in one process on a run file's
-// agents, then the trained pairs and their agents alone on flat at several episode lengths (issue 9.2). The
+// agents, then the trained pairs and their agents alone on flat at several episode lengths. The
 // connectors stage trains the same way over MPI; this command is the small experiment behind
 // postprocess/gallery/science_connector_optimisation.md.
 #include <chrono>

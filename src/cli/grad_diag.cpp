@@ -2,7 +2,7 @@
 // fixed batch, on a run file's trained agents) the slope of that objective, and at what scale? For each
 // horizon: the batch travel, the gradient's norm, how consistent it is across pairs, and, along the gradient and
 // along random directions, central finite differences of the batch objective at several perturbation sizes
-// against the gradient's directional derivative (issue 9.2).
+// against the gradient's directional derivative.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

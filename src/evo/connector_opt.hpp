@@ -1,4 +1,4 @@
-// connector optimisation beyond a constant-rate Adam (issue 9.2): what the field does for exploding or chaotic
+// connector optimisation beyond a constant-rate Adam: what the field does for exploding or chaotic
 // backpropagation through time, each a [connectors] key whose default is the plain method.
 //
 // - a decaying rate (lr_schedule: cosine or exponential to lr·lr_final at the last iteration);

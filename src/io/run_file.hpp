@@ -50,7 +50,7 @@ struct Entry {
   std::string doc;         // one line
   std::string attributes;  // groups: the attributes the program writes on it, comma separated
   bool graded = false;     // also written under graded/{population}/ (the graded stage's populations)
-  bool optional = false;   // written only when a non-default key asks for it (issue 9.2's connector optimisation)
+  bool optional = false;   // written only when a non-default key asks for it (the connector optimisation keys)
   bool is_group() const { return dtype == "group"; }
   std::vector<std::string> axis_names() const;
 };

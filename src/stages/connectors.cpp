@@ -1,6 +1,6 @@
 // connector training as a plan (stages/plan.hpp): every slot (a connector being trained) in lock-step, one round
 // per iteration, one item per pair episode. Two plans: the plain one (Adam or a normalized step on the
-// summed gradient) and, when any of issue 9.2's optimisation keys differs from its default, the extended
+// summed gradient) and, when any of the optimisation keys differs from its default, the extended
 // one (collective::ConnectorOptimizer: decaying rate, keep-best on a validation batch, truncated
 // backpropagation, gradient averaging, CMA-ES). They share the slots, batches, curves and weights rows.
 //
@@ -248,7 +248,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
   std::vector<collective::ProbeSum> sums_;  // each slot's batch, summed in pair order
 };
 
-// the optimisation keys of issue 9.2: ask/tell optimizers, each probe a weight vector on a batch; with
+// the connector optimisation keys: ask/tell optimizers, each probe a weight vector on a batch; with
 // keep_best each slot's current weights also run its fixed validation batch, and a closing round scores
 // the final weights
 class ExtendedConnectorsPlan final : public LockstepPlan {

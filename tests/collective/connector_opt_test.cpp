@@ -1,4 +1,4 @@
-// connector optimisation options (issue 9.2): the decaying rate follows its schedule, keep-best returns the
+// connector optimisation options: the decaying rate follows its schedule, keep-best returns the
 // validation-best weights, truncated backpropagation equals the full gradient when the window covers the
 // episode and differs when it cuts (finite differences of the truncated objective would need the engine to
 // start from a stored state, which it cannot), gradient averaging is exact on a quadratic, CMA-ES improves a known objective and resumes

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 12, end to end: no hang at any rank count, one writer per run file, a killed launcher, clean stops
+# Faults, end to end: no hang at any rank count, one writer per run file, a killed launcher, clean stops
 # on signals, bad outputs. Usage: reliability_test.sh DIVCOLL SOURCE_DIR CASE
 # Every command is bounded with `timeout`; every process started is ended by the EXIT trap (found by the
 # test's own unique folder in its command line). No verdict depends on timing: where a process must be
