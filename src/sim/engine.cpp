@@ -191,14 +191,16 @@ struct Simulator::Impl::Episode {
 namespace {
 // the state k's positions, velocities and contact flags: on the tape with grad, else in a two-state ring
 double* state_x(LineVector<double>& xs, const RunOptions& opt, size_t N2, int k) {
-  return &xs[(opt.grad ? k : k & 1) * N2];
+  return xs.data() + ((opt.grad ? k : k & 1) * N2);
 }
 uint8_t* state_tau(std::vector<uint8_t>& taus, const RunOptions& opt, int N, int k) {
-  return &taus[static_cast<size_t>(opt.grad ? k : k & 1) * N];
+  return taus.data() + (static_cast<size_t>(opt.grad ? k : k & 1) * N);
 }
 // the tape of one step is ≈ 8 KB for a pair and the backward pass reads it in descending order from several
 // arrays at once, which the hardware prefetcher follows poorly: step t − 1's blocks are asked for while step t is
 // being processed
+// (pointers into the buffers are data() + offset, never &v[i]: a buffer a scene does not use (connectors,
+// sensors) is empty, and indexing it is undefined)
 void prefetch(const void* p, size_t bytes) {
   const char* c = static_cast<const char*>(p);
   for (size_t q = 0; q < bytes; q += 64) __builtin_prefetch(c + q);
@@ -274,7 +276,7 @@ bool Simulator::Impl::forward_step(Episode& e, int t) {
   auto sv = [&](int kk) { return state_x(vs, opt, N2, kk); };
   auto st = [&](int kk) { return state_tau(taus, opt, N, kk); };
   // control: o'_t from state t (o kept per step on the tape)
-  double* o = &os[(opt.grad ? t + 1 : 0) * static_cast<size_t>(S)];
+  double* o = os.data() + ((opt.grad ? t + 1 : 0) * static_cast<size_t>(S));
   if (opt.grad) std::copy(os.begin() + t * S, os.begin() + (t + 1) * S, o);
   const size_t ta = (opt.grad ? t : 0) * static_cast<size_t>(m.A) * e.na, tc = (opt.grad ? t : 0) * static_cast<size_t>(e.nc);
   auto control = [&](auto cb) {
@@ -292,12 +294,12 @@ bool Simulator::Impl::forward_step(Episode& e, int t) {
   else control(ControlBuffers<double>{agent_acts.data() + ta, conn_acts.data() + tc});
   // physics substeps
   for (int s = 0; s < n; ++s, ++k) {
-    double* vp = opt.grad ? &vps[static_cast<size_t>(k) * N2] : vps.data();
+    double* vp = opt.grad ? vps.data() + (static_cast<size_t>(k) * N2) : vps.data();
     springs_forward(m, sx(k), sv(k), o, F.data());
     velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
     contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
-                    opt.grad ? &recs[static_cast<size_t>(k) * N] : nullptr);
-    if (opt.grad) count_contacts(&recs[static_cast<size_t>(k) * N], N, res.contacts);
+                    opt.grad ? recs.data() + (static_cast<size_t>(k) * N) : nullptr);
+    if (opt.grad) count_contacts(recs.data() + (static_cast<size_t>(k) * N), N, res.contacts);
   }
   // numerical trouble ends the episode, with where it happened
   const double* x1 = sx(k);
@@ -401,26 +403,26 @@ void Simulator::Impl::adjoint_step(Episode& e, int t) {
   if (t > 0) {
     const size_t k0 = static_cast<size_t>(t - 1) * n;
     if (e.fl) {
-      prefetch(&agent_acts_f[static_cast<size_t>(t - 1) * m.A * na], sizeof(float) * m.A * na);
-      prefetch(&conn_acts_f[static_cast<size_t>(t - 1) * nc], sizeof(float) * nc);
+      prefetch(agent_acts_f.data() + (static_cast<size_t>(t - 1) * m.A * na), sizeof(float) * m.A * na);
+      prefetch(conn_acts_f.data() + (static_cast<size_t>(t - 1) * nc), sizeof(float) * nc);
     } else {
-      prefetch(&agent_acts[static_cast<size_t>(t - 1) * m.A * na], sizeof(double) * m.A * na);
-      prefetch(&conn_acts[static_cast<size_t>(t - 1) * nc], sizeof(double) * nc);
+      prefetch(agent_acts.data() + (static_cast<size_t>(t - 1) * m.A * na), sizeof(double) * m.A * na);
+      prefetch(conn_acts.data() + (static_cast<size_t>(t - 1) * nc), sizeof(double) * nc);
     }
-    prefetch(&recs[k0 * N], sizeof(ContactRecord) * n * N);
-    prefetch(&xs[k0 * N2], sizeof(double) * n * N2);
-    prefetch(&vs[k0 * N2], sizeof(double) * n * N2);
-    prefetch(&vps[k0 * N2], sizeof(double) * n * N2);
-    prefetch(&os[static_cast<size_t>(t) * S], sizeof(double) * S);
+    prefetch(recs.data() + (k0 * N), sizeof(ContactRecord) * n * N);
+    prefetch(xs.data() + (k0 * N2), sizeof(double) * n * N2);
+    prefetch(vs.data() + (k0 * N2), sizeof(double) * n * N2);
+    prefetch(vps.data() + (k0 * N2), sizeof(double) * n * N2);
+    prefetch(os.data() + (static_cast<size_t>(t) * S), sizeof(double) * S);
   }
-  const double* o = &os[(t + 1) * static_cast<size_t>(S)];
+  const double* o = os.data() + ((t + 1) * static_cast<size_t>(S));
   for (int s = n - 1; s >= 0; --s) {
     --k;
-    const double* vp = &vps[static_cast<size_t>(k) * N2];
+    const double* vp = vps.data() + (static_cast<size_t>(k) * N2);
     // contact: x̄_{k+1}, v̄_{k+1} → v̄', x̄_k (partial)
     std::fill(e.xbar_prev, e.xbar_prev + N2, 0.0);
     std::fill(e.vbar_prev, e.vbar_prev + N2, 0.0);
-    contact_adjoint(m, vp, sv(k + 1), &recs[static_cast<size_t>(k) * N], e.xbar, e.vbar, vpb.data(), e.xbar_prev);
+    contact_adjoint(m, vp, sv(k + 1), recs.data() + (static_cast<size_t>(k) * N), e.xbar, e.vbar, vpb.data(), e.xbar_prev);
     velocity_adjoint(m, vpb.data(), e.vbar_prev, Fb.data());
     springs_adjoint(m, sx(k), sv(k), o, Fb.data(), e.xbar_prev, e.vbar_prev, ob.data(), e.Lbar);
     std::swap(e.xbar, e.xbar_prev);
