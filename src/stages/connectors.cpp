@@ -450,8 +450,10 @@ std::vector<morph::Agent> load_population(const io::RunConfig& cfg, const io::h5
   for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
   if (stored) io::read_anchors(file, at, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
-  if (!stored)
-    for (auto& a : agents) a.anchors = collective::compute_anchors(a, io::run_physics(cfg));
+  if (!stored) {
+    const sim::RunPhysics physics = io::run_physics(cfg);
+    for (auto& a : agents) a.anchors = collective::compute_anchors(a, physics);
+  }
   return agents;
 }
 

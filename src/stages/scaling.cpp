@@ -21,6 +21,7 @@ class ScalingPlan final : public Plan {
  public:
   ScalingPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, std::vector<std::vector<double>> weights)
       : cfg_(cfg), S_(cfg.scaling), agents_(agents), weights_(std::move(weights)),
+        tether_(collective::tether(cfg, "weak_uniform")), physics_(io::run_physics(cfg)),
         E_(static_cast<int>(cfg.deploy.environments.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
         R_(cfg.connectors.replicates), chains_(NS_ * 2) {
     const int pop = static_cast<int>(agents.size());
@@ -75,7 +76,7 @@ class ScalingPlan final : public Plan {
   // the 20-agent chains first, so that an environment's round ends on 5-agent ones
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, collective::tether(cfg_, "weak_uniform"), io::run_physics(cfg_),
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, physics_,
                               cfg_.deploy.environments, S_.episode_steps, true));
   }
   void reduce(int ei, int64_t, const std::string& bytes) override { done_[ei].push_back(unpack<EpisodeDone>(bytes)); }
@@ -106,6 +107,8 @@ class ScalingPlan final : public Plan {
   const io::RunConfig::Scaling& S_;
   const std::vector<morph::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
+  const collective::Tether tether_;  // the weak connector's springs
+  const sim::RunPhysics physics_;    // run.contact, run.precision
   const int E_, NS_, D_, R_;
   std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
   sim::Simulator sim_;

@@ -27,6 +27,7 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
+from ..results import run_script  # noqa: E402
 from ..runfile import STATUS_NAMES, RunFileError, read_final, read_meta  # noqa: E402
 
 ACTIVE_COLOR = "#b2182b"  # dark red
@@ -174,19 +175,16 @@ def main(argv=None) -> int:
     ap.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
     args = ap.parse_args(argv)
     out_dir = args.out if args.out is not None else (os.path.dirname(os.path.abspath(args.run)))
-    try:
+
+    def draw_run(args):
         meta = read_meta(args.run)
         pop = read_final(args.run, params=False)
         if meta.agents_status not in (None, "complete"):
             print(f"fig_s1: warning: {args.run}: agents stage status is \"{meta.agents_status}\"",
                   file=sys.stderr)
-        paths = draw(pop, meta, out_dir, dpi=args.dpi)
-    except RunFileError as e:
-        print(f"fig_s1: {e}", file=sys.stderr)
-        return 2
-    for p in paths:
-        print(p)
-    return 0
+        return draw(pop, meta, out_dir, dpi=args.dpi)
+
+    return run_script("fig_s1", draw_run, args)
 
 
 if __name__ == "__main__":
