@@ -67,6 +67,20 @@ Key pick(const char* sec, const char* name, Type t, std::string def, std::vector
   return Key{sec, name, t, std::move(def), "", std::move(choices), "", doc, f};
 }
 
+// deploy.environments: its names are the tables of configs/environments.toml (the allowed text says so
+// rather than listing them, so that adding an environment changes no document)
+Key envs_key(std::string def, std::vector<std::string> choices, const char* doc) {
+  Key k = pick("deploy", "environments", Type::StringList, std::move(def), std::move(choices), doc,
+               DIVCOLL_FIELD(deploy.environments));
+  k.range = "names of tables of configs/environments.toml (`divcoll envs`)";
+  return k;
+}
+
+// the paper's environments (SPEC §3), flat first: deploy.environments' default
+const std::vector<std::string> kPaperEnvironments = {"flat", "decline", "gap", "ice", "incline", "low_gravity",
+                                                     "obstacle", "sand", "step_down", "step_up", "sticky",
+                                                     "treadmill", "wind"};
+
 Key flag(const char* sec, const char* name, const char* def, const char* doc, Ref (*f)(RunConfig&)) {
   return Key{sec, name, Type::Bool, def, "", {}, "", doc, f};
 }
@@ -267,9 +281,10 @@ const std::vector<Key>& schema() {
         num("deploy", "pairs", T::Int, "100", "[1, 100000]", "pairs",
             "pairs per connector replicate (uniform: agent i with its clone, i < pairs)",
             DIVCOLL_FIELD(deploy.pairs)),
-        pick("deploy", "environments", T::StringList, string_list(envs), envs,
-             "environments of the experiments; flat (the training one) must be listed, the others are novel",
-             DIVCOLL_FIELD(deploy.environments)),
+        envs_key(string_list(kPaperEnvironments), envs,
+                 "environments of the experiments; flat (the training one) must be listed, the others are novel. "
+                 "The default is the paper's 13 (SPEC §3); an environment added to configs/environments.toml "
+                 "runs where a config lists it"),
         num("deploy", "hidden_subsample", T::Int, "10000", "[0, 1e9]", "states",
             "hidden states kept per environment for the familiarity analysis (0 = all)",
             DIVCOLL_FIELD(deploy.hidden_subsample)),
@@ -956,7 +971,7 @@ std::string allowed_text(const Key& k) {
     case Type::Choice:
       return "one of " + join(k.choices);
     case Type::StringList:
-      return "any of " + join(k.choices);
+      return k.range.empty() ? "any of " + join(k.choices) : k.range;
   }
   return "";
 }
@@ -1050,7 +1065,7 @@ std::string schema_markdown() {
       "|---|---|---|---|---|---|\n";
   for (const Key& k : schema()) {
     std::string def = k.def;
-    if (k.type == Type::StringList && def == string_list(k.choices)) def = "all";
+    if (k.type == Type::StringList && k.range.empty() && def == string_list(k.choices)) def = "all";
     out += "| `" + k.full() + "` | " + type_text(k.type) + " | `" + def + "` | " + allowed_text(k) + " | " +
            k.unit + " | " + k.doc + " |\n";
   }

@@ -82,7 +82,11 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
   EXPECT_EQ(d.connectors.amplitude, 0.6);  // SPEC §6.2
   EXPECT_EQ(d.connectors.lr, 3e-3);
   EXPECT_EQ(d.connectors.kinds.size(), 4u);
-  EXPECT_EQ(d.deploy.environments, environment_names());
+  // the paper's 13 (SPEC §3), flat first, each a table of configs/environments.toml (which may hold more)
+  EXPECT_EQ(d.deploy.environments,
+            (std::vector<std::string>{"flat", "decline", "gap", "ice", "incline", "low_gravity", "obstacle", "sand",
+                                      "step_down", "step_up", "sticky", "treadmill", "wind"}));
+  for (const std::string& e : d.deploy.environments) EXPECT_TRUE(is_known_environment(e)) << e;
   EXPECT_EQ(d.deploy.episode_steps, 3000);
   EXPECT_EQ(d.scaling.sizes, (std::vector<int>{5, 10, 20}));
   EXPECT_TRUE(d.graded.enabled);
