@@ -118,7 +118,7 @@ class AdversityPlan final : public Plan {
       : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), agents_(agents), weights_(std::move(weights)),
         pairs_(std::move(pairs)), type_index_(type_index), novel_(std::move(novel)), deployed_(std::move(deployed)),
         E_(static_cast<int>(envs_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
-        T_(deploy_types), pop_(static_cast<int>(agents.size())), tether_(collective::strength_tether(cfg, "weak")) {
+        T_(deploy_types), pop_(static_cast<int>(agents.size())), tether_(collective::strength_tether(cfg.connectors, "weak")) {
     rec_ = physics_.options();
     rec_.steps = cfg.deploy.episode_steps;
     rec_.record = true;
@@ -295,7 +295,7 @@ class AdversityPlan final : public Plan {
     const int a = unpack<int32_t>(bytes);
     const std::string& env = envs_[env_];
     sim::RunResult full;
-    const double offset = collective::alone_feature_offset(cfg_, agents_[a]);
+    const double offset = collective::alone_feature_offset(cfg_.deploy, agents_[a]);
     const collective::PairOutcome o = collective::run_alone(sim_, agents_[a], env, physics_.contact, rec_, &full, offset);
     AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
     if (o.status == sim::Status::ok)
@@ -546,7 +546,7 @@ void run_analysis_stage(Driver& driver) {
     weights[t] = io::read_weights(file, "connectors/" + kind, R);
   }
   std::array<std::vector<std::pair<int, int>>, 2> pairs;
-  pairs[0] = collective::deploy_uniform_pairs(cfg);
+  pairs[0] = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors);
   {
     const std::vector<int32_t> dp = io::read_checked<int32_t>(file, "deploy/diverse_pairs", "pair,slot",
                                                               Dims{static_cast<hsize_t>(NP), 2},

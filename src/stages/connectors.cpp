@@ -484,7 +484,7 @@ void run_connectors_stage(Driver& driver) {
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::tether(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
+      slots.push_back({collective::tether(cfg.connectors, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(driver, agents, slots, spec);

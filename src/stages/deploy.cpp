@@ -54,7 +54,7 @@ class DeployPlan final : public Plan {
       if (types_[t] == "weak_uniform@uniform" || types_[t] == "weak_diverse@diverse") hidden_types_.push_back(t);
     Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
     diverse_pairs_ = collective::random_pairs(prng, pop_, NP_);
-    uniform_pairs_ = collective::deploy_uniform_pairs(cfg);
+    uniform_pairs_ = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors);
   }
   Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return E_; }
@@ -101,7 +101,7 @@ class DeployPlan final : public Plan {
     opt.record = early_;
     sim::RunResult full;
     if (e.type < 0) {
-      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
+      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(cfg_.deploy, agents_[e.a]));
       if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / morph::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
@@ -240,7 +240,7 @@ void run_deploy_stage(Driver& driver) {
     for (const char* dep : {"uniform", "diverse"}) {
       types.names.push_back(kind + "@" + dep);
       types.weights.push_back(reps);
-      types.tethers.push_back(collective::tether(cfg, kind));
+      types.tethers.push_back(collective::tether(cfg.connectors, kind));
       types.diverse.push_back(std::string(dep) == "diverse");
     }
   }

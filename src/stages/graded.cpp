@@ -73,7 +73,7 @@ std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, 
   };
   const uint64_t uG = GP, uR = R, uN = NP;
   return std::make_unique<EpisodesPlan>(std::string("graded ") + kGradedPopulations[v] + " deploy", base, agents,
-                                        std::move(weights), collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
+                                        std::move(weights), collective::tether(cfg.connectors, "weak_diverse"), io::run_physics(cfg), envs,
                                         cfg.deploy.episode_steps,
                                         std::vector<EpisodesPlan::Part>{{base + "/deploy/agents", {uG}},
                                                                         {base + "/deploy/pairs", {uR, uN}}},
@@ -109,7 +109,7 @@ void run_graded_stage(Driver& driver) {
       store_anchors(driver, spec.group, agents);
       std::vector<ConnectorSlot> slots;
       for (int r = 0; r < R; ++r)
-        slots.push_back({collective::tether(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
+        slots.push_back({collective::tether(cfg.connectors, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
                          base + "/connectors/weak_diverse", r});
       TrainSpec ts{base + "/connectors", std::string("graded ") + kGradedPopulations[v] + " connectors",
                    cfg.connectors.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};

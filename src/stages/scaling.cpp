@@ -21,7 +21,7 @@ class ScalingPlan final : public Plan {
  public:
   ScalingPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, std::vector<std::vector<double>> weights)
       : cfg_(cfg), S_(cfg.scaling), agents_(agents), weights_(std::move(weights)),
-        tether_(collective::tether(cfg, "weak_uniform")), physics_(io::run_physics(cfg)),
+        tether_(collective::tether(cfg.connectors, "weak_uniform")), physics_(io::run_physics(cfg)),
         E_(static_cast<int>(cfg.deploy.environments.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
         R_(cfg.connectors.replicates), chains_(NS_ * 2) {
     const int pop = static_cast<int>(agents.size());

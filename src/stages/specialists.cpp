@@ -31,7 +31,7 @@ void run_specialists_stage(Driver& driver) {
   std::vector<ConnectorSlot> slots;
   for (int e = 0; e < E; ++e)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::tether(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
+      slots.push_back({collective::tether(cfg.connectors, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
                        "specialists/" + envs[e], r});
   TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(driver, agents, slots, spec);
@@ -59,7 +59,7 @@ void run_specialists_stage(Driver& driver) {
                   bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
     return std::string(b);
   };
-  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg.connectors, "weak_diverse"), io::run_physics(cfg), envs,
                     cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   driver.drive(plan);

@@ -31,7 +31,7 @@ struct Case {
       for (const char* dep : {"uniform", "diverse"}) {
         t.names.push_back(kind + "@" + dep);
         t.weights.push_back(weights[k]);
-        t.tethers.push_back(collective::tether(cfg, kind));
+        t.tethers.push_back(collective::tether(cfg.connectors, kind));
         t.diverse.push_back(std::string(dep) == "diverse");
       }
     }
@@ -40,7 +40,7 @@ struct Case {
   }
   std::unique_ptr<Plan> adversity(bool damaged = false) const {
     std::array<std::vector<std::pair<int, int>>, 2> pairs;
-    pairs[0] = collective::deploy_uniform_pairs(cfg);
+    pairs[0] = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors);
     const std::vector<double>& dp = test::at(deployed, "deploy/diverse_pairs").values;
     for (int q = 0; q < 3; ++q) pairs[1].emplace_back(static_cast<int>(dp[2 * q]), static_cast<int>(dp[2 * q + 1]));
     Deployed d;

@@ -80,7 +80,7 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
       EXPECT_TRUE(test::same_bits(
           test::at(d, "graded/same_shape/deploy/pairs/travel_u").values[e * 2 + q],
           collective::run_pair(sim, agents[pairs[q].first], agents[pairs[q].second], weights[0],
-                               collective::tether(cfg, "weak_diverse"), env, sim::RunPhysics{}, cfg.deploy.episode_steps, false)
+                               collective::tether(cfg.connectors, "weak_diverse"), env, sim::RunPhysics{}, cfg.deploy.episode_steps, false)
               .travel_u));
   }
   SerialOptions o;
