@@ -30,7 +30,7 @@ struct Case {
     }
     return t;
   }
-  std::unique_ptr<Plan> plan() const { return make_deploy_plan(cfg, agents, types()); }
+  std::unique_ptr<Plan> plan() const { return make_deploy_plan(deploy_def(cfg), agents, types()); }
 };
 
 TEST(DeployPlan, RecordsEveryEnvironmentsAgentsCollectivesAndHiddenStates) {

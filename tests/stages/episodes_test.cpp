@@ -16,7 +16,7 @@ namespace {
 struct Case {
   io::RunConfig cfg = test::tiny({"deploy.episode_steps=60", "deploy.pairs=2", "specialists.replicates=2"});
   std::vector<morph::Agent> agents = test::random_population(4);
-  std::vector<std::string> envs = novel_environments(cfg);
+  std::vector<std::string> envs = novel_environments(cfg.deploy);
   std::vector<std::vector<double>> weights;  // environment · R + replicate
   std::vector<std::pair<int, int>> pairs = {{0, 1}, {2, 3}};
   Case() {

@@ -24,7 +24,7 @@ struct Case {
       weights.push_back(morph::init_connector_params(rng));
     }
   }
-  std::unique_ptr<Plan> plan() const { return make_scaling_plan(cfg, agents, weights); }
+  std::unique_ptr<Plan> plan() const { return make_scaling_plan(scaling_def(cfg), agents, weights); }
 };
 
 TEST(ScalingPlan, RecordsTheChainsAndEveryEnvironmentsTravel) {
