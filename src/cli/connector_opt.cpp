@@ -54,7 +54,7 @@ int connector_opt(const ConnectorOptArgs& a) {
   for (size_t k = 0; k < C.kinds.size(); ++k) {
     const std::string& kind = C.kinds[k];
     const bool diverse = io::connector_kind(kind).diverse;
-    const collective::Tether stiff = collective::tether(cfg, kind);
+    const collective::Tether stiff = collective::tether(C, kind);
     std::vector<std::pair<int, int>> eval;
     if (diverse) {
       Rng rng = make_rng(cfg.run.seed, 3000, 0);  // the deployment's diverse pairs

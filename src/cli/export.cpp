@@ -72,7 +72,7 @@ int export_scene(const ExportArgs& a) {
     if (a.what == "alone") {
       check_range("--agent", a.agent, pop);
       s = collective::agent_scene(agents[a.agent], a.env, law, {},
-                                  collective::alone_feature_offset(cfg, agents[a.agent]));
+                                  collective::alone_feature_offset(cfg.deploy, agents[a.agent]));
       idx = {e, a.agent};
       what = "agent " + std::to_string(a.agent) + " alone";
     } else {
@@ -82,10 +82,10 @@ int export_scene(const ExportArgs& a) {
       const bool diverse = a.type.substr(a.type.find('@') + 1) == "diverse";
       check_range("--pair", a.pair, cfg.deploy.pairs);
       const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
-      const auto up = collective::deploy_uniform_pairs(cfg)[a.pair];
+      const auto up = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors)[a.pair];
       const int p = diverse ? dp[2 * a.pair] : up.first, q = diverse ? dp[2 * a.pair + 1] : up.second;
       with_anchors();
-      const collective::Tether k = collective::tether(cfg, kind);
+      const collective::Tether k = collective::tether(cfg.connectors, kind);
       s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "connectors/" + kind, a.replicate), k,
                                  a.env, law);
       idx = {e, t, a.replicate, a.pair};
@@ -102,7 +102,7 @@ int export_scene(const ExportArgs& a) {
     const int p = dp[2 * a.pair], q = dp[2 * a.pair + 1];
     with_anchors();
     s = collective::pair_scene(agents[p], agents[q], io::read_weights_row(f, "specialists/" + a.env, a.replicate),
-                               collective::tether(cfg, "weak_diverse"), a.env, law);
+                               collective::tether(cfg.connectors, "weak_diverse"), a.env, law);
     idx = {e, a.replicate, a.pair};
     steps = cfg.deploy.episode_steps;
     stage = "specialists";
@@ -130,7 +130,7 @@ int export_scene(const ExportArgs& a) {
     std::vector<const morph::Agent*> ptr;
     for (int32_t m : members) ptr.push_back(&agents[m]);
     s = collective::chain_scene(ptr, io::read_weights_row(f, v ? "connectors/weak_diverse" : "connectors/weak_uniform", a.replicate),
-                                collective::tether(cfg, v ? "weak_diverse" : "weak_uniform"), a.env, law);
+                                collective::tether(cfg.connectors, v ? "weak_diverse" : "weak_uniform"), a.env, law);
     idx = {e, si, v, a.replicate, a.draw};
     steps = cfg.scaling.episode_steps;
     stage = "scaling";

@@ -86,7 +86,7 @@ int grad_diag(const GradDiagArgs& a) {
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
   const bool diverse = io::connector_kind(a.kind).diverse;
-  const collective::Tether k = collective::tether(cfg, a.kind);
+  const collective::Tether k = collective::tether(C, a.kind);
   DIVCOLL_THROW_UNLESS(diverse || a.pairs <= pop, "--pairs " << a.pairs << " is more than the population (" << pop << ")");
   // the stage's replicate 0 of this kind: its initial weights and its first batch
   const uint64_t stream = 2000 + static_cast<uint64_t>(kind) * C.replicates;

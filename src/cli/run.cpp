@@ -202,7 +202,7 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
       const std::vector<double> w = morph::init_connector_params(rng);
       double k = cfg.connectors.weak_stiffness;
       for (const std::string& kind : cfg.connectors.kinds)
-        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg, kind));
+        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg.connectors, kind));
       std::vector<std::string> envs = {"flat"};
       if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
       for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env, physics.contact), cfg.connectors.episode_steps, "connectors.episode_steps");

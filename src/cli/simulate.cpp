@@ -102,7 +102,7 @@ int scene(const SceneArgs& a) {
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
   const io::RunConfig cfg = a.config.empty() ? io::default_config() : io::load_config(a.config);
-  const collective::Tether k = collective::strength_tether(cfg, a.connector);
+  const collective::Tether k = collective::strength_tether(cfg.connectors, a.connector);
   // the config's contact law (run.contact) for the scene and the anchors' runs; the networks in double
   const sim::RunPhysics physics{io::run_physics(cfg).contact, false};
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
@@ -230,7 +230,7 @@ int demo(const DemoArgs& a) {
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config(), "weak"), env,
+      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config().connectors, "weak"), env,
                                                   physics.contact);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it

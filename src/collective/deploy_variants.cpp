@@ -8,24 +8,25 @@
 
 namespace divcoll::collective {
 
-Tether tether(const io::RunConfig& cfg, std::string_view kind) {
-  return {cfg.connectors.follower ? 0.0 : io::stiffness(cfg, kind), cfg.connectors.amplitude, cfg.connectors.damping};
+Tether tether(const io::RunConfig::Connectors& connectors, std::string_view kind) {
+  return {connectors.follower ? 0.0 : io::stiffness(connectors, kind), connectors.amplitude, connectors.damping};
 }
 
-Tether strength_tether(const io::RunConfig& cfg, std::string_view strength) {
-  return {cfg.connectors.follower ? 0.0 : io::strength_stiffness(cfg, strength), cfg.connectors.amplitude,
-          cfg.connectors.damping};
+Tether strength_tether(const io::RunConfig::Connectors& connectors, std::string_view strength) {
+  return {connectors.follower ? 0.0 : io::strength_stiffness(connectors, strength), connectors.amplitude,
+          connectors.damping};
 }
 
-std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig& cfg) {
-  std::vector<std::pair<int, int>> p = uniform_pairs(cfg.deploy.pairs);
-  if (cfg.deploy.uniform_agents == "held_out")
-    for (auto& [a, b] : p) a += cfg.connectors.batch_pairs, b += cfg.connectors.batch_pairs;
+std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig::Deploy& deploy,
+                                                      const io::RunConfig::Connectors& connectors) {
+  std::vector<std::pair<int, int>> p = uniform_pairs(deploy.pairs);
+  if (deploy.uniform_agents == "held_out")
+    for (auto& [a, b] : p) a += connectors.batch_pairs, b += connectors.batch_pairs;
   return p;
 }
 
-double alone_feature_offset(const io::RunConfig& cfg, const Agent& a) {
-  const std::string& f = cfg.deploy.feature_placement;
+double alone_feature_offset(const io::RunConfig::Deploy& deploy, const Agent& a) {
+  const std::string& f = deploy.feature_placement;
   if (f == "pair_mean") return 0.5 * (body_length(a) + kAgentGap);
   if (f == "rear") return body_length(a) + kAgentGap;
   return 0.0;

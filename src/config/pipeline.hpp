@@ -70,15 +70,15 @@ inline const ConnectorKind& connector_kind(std::string_view name) {
   for (const ConnectorKind& k : kConnectorKinds) all += (all.empty() ? "" : ", ") + std::string(k.name);
   throw InputError(msg() << "unknown connector kind '" << name << "' (" << all << ")");
 }
-// the stiffness of a kind, force/u, from the config
-inline double stiffness(const RunConfig& cfg, const ConnectorKind& k) {
-  return k.weak ? cfg.connectors.weak_stiffness : cfg.connectors.strong_stiffness;
+// the stiffness of a kind, force/u, from the config's [connectors] section
+inline double stiffness(const RunConfig::Connectors& c, const ConnectorKind& k) {
+  return k.weak ? c.weak_stiffness : c.strong_stiffness;
 }
-inline double stiffness(const RunConfig& cfg, std::string_view kind) { return stiffness(cfg, connector_kind(kind)); }
+inline double stiffness(const RunConfig::Connectors& c, std::string_view kind) { return stiffness(c, connector_kind(kind)); }
 // the stiffness of a strength alone ("weak" or "strong"), as `divcoll scene --connector` names it
-inline double strength_stiffness(const RunConfig& cfg, std::string_view strength) {
-  if (strength == "weak") return cfg.connectors.weak_stiffness;
-  if (strength == "strong") return cfg.connectors.strong_stiffness;
+inline double strength_stiffness(const RunConfig::Connectors& c, std::string_view strength) {
+  if (strength == "weak") return c.weak_stiffness;
+  if (strength == "strong") return c.strong_stiffness;
   throw InputError(msg() << "--connector must be weak or strong (got '" << strength << "')");
 }
 

@@ -30,11 +30,13 @@
 
 #include "collective/builders.hpp"
 #include "collective/pairs.hpp"
+#include "config/config.hpp"
 #include "evo/optim.hpp"
 
 namespace divcoll::collective {
 
-// the [connectors] keys the optimizer reads (io::RunConfig::Connectors; copied so this layer needs no io)
+// the [connectors] keys the optimizer reads, taken from the section by opt_settings; a test or a command may also
+// set them directly
 struct OptSettings {
   std::string optimizer = "adam";  // adam | normalized | cmaes | es
   double lr = 0.003, clip_norm = 1.0;
@@ -48,8 +50,7 @@ struct OptSettings {
   double es_sigma = 0.02;                // cmaes initial sd per weight; es perturbation sd per weight
   std::string clip = "global";           // global | per_pair: clip_norm clips the batch mean or each pair's gradient
 };
-template <class Connectors>
-OptSettings opt_settings(const Connectors& c) {
+inline OptSettings opt_settings(const io::RunConfig::Connectors& c) {
   return {c.optimizer,    c.lr,          c.clip_norm, c.lr_schedule, c.lr_final,  c.bptt_window,
           c.grad_samples, c.grad_sigma,  c.keep_best, c.es_popsize,  c.es_sigma, c.clip};
 }

@@ -19,6 +19,7 @@
 #include "stages/connectors.hpp"
 #include "stages/deploy.hpp"
 #include "stages/driver.hpp"
+#include "stages/episodes.hpp"
 #include "stages/payload.hpp"
 
 namespace divcoll::stages {
@@ -111,18 +112,18 @@ std::vector<double> finite(const std::vector<double>& v) {
 // taken over every environment's rows, restored after a resume
 class AdversityPlan final : public Plan {
  public:
-  AdversityPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+  AdversityPlan(const AnalysisDef& def, const std::vector<morph::Agent>& agents,
                 std::array<std::vector<std::vector<double>>, 2> weights,
                 std::array<std::vector<std::pair<int, int>>, 2> pairs,
                 std::array<int, 2> type_index, int deploy_types, std::vector<std::string> novel, Deployed deployed)
-      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), agents_(agents), weights_(std::move(weights)),
-        pairs_(std::move(pairs)), type_index_(type_index), novel_(std::move(novel)), deployed_(std::move(deployed)),
-        E_(static_cast<int>(envs_.size())), NP_(cfg.deploy.pairs), R_(cfg.connectors.replicates),
-        T_(deploy_types), pop_(static_cast<int>(agents.size())), tether_(collective::strength_tether(cfg, "weak")) {
+      : def_(def), agents_(agents), weights_(std::move(weights)), pairs_(std::move(pairs)), type_index_(type_index),
+        novel_(std::move(novel)), deployed_(std::move(deployed)), E_(static_cast<int>(envs_.size())),
+        NP_(def_.deploy.pairs), R_(def_.connectors.replicates), T_(deploy_types), pop_(static_cast<int>(agents.size())),
+        tether_(collective::strength_tether(def_.connectors, "weak")) {
     rec_ = physics_.options();
-    rec_.steps = cfg.deploy.episode_steps;
+    rec_.steps = def_.deploy.episode_steps;
     rec_.record = true;
-    const int frames = cfg.deploy.episode_steps / A_.dtw_every + 1;
+    const int frames = def_.deploy.episode_steps / A_.dtw_every + 1;
     dopt_.band = static_cast<int>(std::ceil(A_.dtw_band * frames));
     dopt_.cost = A_.dtw_cost == "squared_sqrt" ? analysis::DtwCost::squared_sqrt : analysis::DtwCost::euclidean;
     dopt_.step = A_.dtw_step == "symmetric2" ? analysis::DtwStep::symmetric2 : analysis::DtwStep::symmetric1;
@@ -264,7 +265,7 @@ class AdversityPlan final : public Plan {
         rep_means.insert(rep_means.end(), per_rep[t][w].begin(), per_rep[t][w].end());
         const std::vector<double> x = finite(per_rep[t][w]);
         const analysis::Interval ci =
-            analysis::bootstrap_ci(x, seed_for(cfg_.run.seed, kAnalysisStage + 3, 2 * t + w), A_.bootstrap_resamples);
+            analysis::bootstrap_ci(x, seed_for(def_.seed, kAnalysisStage + 3, 2 * t + w), A_.bootstrap_resamples);
         summary_.insert(summary_.end(), {analysis::mean(x), ci.lo, ci.hi});
       }
     for (int w = 0; w < 2; ++w) {
@@ -295,7 +296,7 @@ class AdversityPlan final : public Plan {
     const int a = unpack<int32_t>(bytes);
     const std::string& env = envs_[env_];
     sim::RunResult full;
-    const double offset = collective::alone_feature_offset(cfg_, agents_[a]);
+    const double offset = collective::alone_feature_offset(def_.deploy, agents_[a]);
     const collective::PairOutcome o = collective::run_alone(sim_, agents_[a], env, physics_.contact, rec_, &full, offset);
     AloneDone d{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), {}};
     if (o.status == sim::Status::ok)
@@ -324,10 +325,10 @@ class AdversityPlan final : public Plan {
     return pack(d);
   }
 
-  const io::RunConfig& cfg_;
-  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
-  const io::RunConfig::Analysis& A_;
-  const std::vector<std::string>& envs_;
+  const AnalysisDef def_;
+  const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
+  const io::RunConfig::Analysis& A_ = def_.analysis;
+  const std::vector<std::string>& envs_ = def_.deploy.environments;
   const std::vector<morph::Agent>& agents_;
   const std::array<std::vector<std::vector<double>>, 2> weights_;  // [type][replicate]
   const std::array<std::vector<std::pair<int, int>>, 2> pairs_;     // [type][pair]
@@ -358,11 +359,10 @@ class FamiliarityPlan final : public Plan {
  public:
   // hidden: deploy's states of the two types (E × R × NP × K × dim: hidden states, dim 32, or with
   // analysis.familiarity_on = inputs the network inputs, dim 11; none when every round is done)
-  FamiliarityPlan(const io::RunConfig& cfg, std::vector<std::string> novel, std::array<std::vector<float>, 2> hidden,
+  FamiliarityPlan(const AnalysisDef& def, std::vector<std::string> novel, std::array<std::vector<float>, 2> hidden,
                   int K, int dim)
-      : cfg_(cfg), A_(cfg.analysis), envs_(cfg.deploy.environments), novel_(std::move(novel)), K_(K), dim_(dim),
-        hidden_(std::move(hidden)), EN_(static_cast<int>(novel_.size())), NP_(cfg.deploy.pairs),
-        R_(cfg.connectors.replicates),
+      : def_(def), novel_(std::move(novel)), K_(K), dim_(dim), hidden_(std::move(hidden)),
+        EN_(static_cast<int>(novel_.size())), NP_(def_.deploy.pairs), R_(def_.connectors.replicates),
         e_flat_(static_cast<int>(std::find(envs_.begin(), envs_.end(), "flat") - envs_.begin())) {}
   Info info() const override {
     Info i{"analysis familiarity", "analysis", "familiarity_envs_done", "environment", "fits", 1};
@@ -400,7 +400,7 @@ class FamiliarityPlan final : public Plan {
     const int k = task.novel, t = task.type, r = task.replicate;
     const int ei = static_cast<int>(std::find(envs_.begin(), envs_.end(), novel_[k]) - envs_.begin());
     const uint64_t item = (static_cast<uint64_t>(k) * 2 + t) * R_ + r;
-    Rng srng = make_rng(cfg_.run.seed, kAnalysisStage + 1, item);
+    Rng srng = make_rng(def_.seed, kAnalysisStage + 1, item);
     std::vector<float> states = states_of(hidden_[t], dim_, e_flat_, r, R_, NP_, K_, A_.max_states, srng);
     const std::vector<float> nov = states_of(hidden_[t], dim_, ei, r, R_, NP_, K_, A_.max_states, srng);
     FitDone d;
@@ -415,7 +415,7 @@ class FamiliarityPlan final : public Plan {
     }
     std::vector<double> X(states.begin(), states.end());
     analysis::PacmapOptions po;
-    po.seed = seed_for(cfg_.run.seed, kAnalysisStage + 2, item);
+    po.seed = seed_for(def_.seed, kAnalysisStage + 2, item);
     const std::vector<double> y = analysis::pacmap_fit(X.data(), n, dim_, po);
     std::vector<uint8_t> label(n, 0);
     std::fill(label.begin() + d.n_train, label.end(), 1);
@@ -495,9 +495,9 @@ class FamiliarityPlan final : public Plan {
   }
 
  private:
-  const io::RunConfig& cfg_;
-  const io::RunConfig::Analysis& A_;
-  const std::vector<std::string>& envs_;
+  const AnalysisDef def_;
+  const io::RunConfig::Analysis& A_ = def_.analysis;
+  const std::vector<std::string>& envs_ = def_.deploy.environments;
   const std::vector<std::string> novel_;
   const int K_;                                     // hidden states per episode
   const int dim_;                                   // values per state: 32 hidden, or 11 inputs
@@ -509,28 +509,32 @@ class FamiliarityPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+AnalysisDef analysis_def(const io::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.analysis, cfg.deploy, cfg.connectors, io::run_physics(cfg)};
+}
+
+std::unique_ptr<Plan> make_adversity_plan(const AnalysisDef& def, const std::vector<morph::Agent>& agents,
                                           std::array<std::vector<std::vector<double>>, 2> weights,
                                           std::array<std::vector<std::pair<int, int>>, 2> pairs,
                                           std::array<int, 2> type_index, int deploy_types,
                                           std::vector<std::string> novel, Deployed deployed) {
-  return std::make_unique<AdversityPlan>(cfg, agents, std::move(weights), std::move(pairs), type_index, deploy_types,
+  return std::make_unique<AdversityPlan>(def, agents, std::move(weights), std::move(pairs), type_index, deploy_types,
                                          std::move(novel), std::move(deployed));
 }
 
-std::unique_ptr<Plan> make_familiarity_plan(const io::RunConfig& cfg, std::vector<std::string> novel,
+std::unique_ptr<Plan> make_familiarity_plan(const AnalysisDef& def, std::vector<std::string> novel,
                                             std::array<std::vector<float>, 2> hidden, int K, int dim) {
-  return std::make_unique<FamiliarityPlan>(cfg, std::move(novel), std::move(hidden), K, dim);
+  return std::make_unique<FamiliarityPlan>(def, std::move(novel), std::move(hidden), K, dim);
 }
 
 void run_analysis_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const AnalysisDef def = analysis_def(driver.config());
   io::h5::File& file = driver.file();
-  const auto& D = cfg.deploy;
+  const auto& D = def.deploy;
   const std::vector<std::string>& envs = D.environments;
-  const int NP = D.pairs, R = cfg.connectors.replicates;
+  const int NP = D.pairs, R = def.connectors.replicates;
   DIVCOLL_THROW_UNLESS(complete(file, "deploy"), file.file() << ": the analysis stage needs a complete deploy stage");
-  const std::vector<morph::Agent> agents = load_population(cfg, file);
+  const std::vector<morph::Agent> agents = load_population(def.physics, file);
 
   // the two types among deploy's, their weights and pairs
   const std::vector<std::string> deploy_types = io::split(file.group("deploy").read_string("types"));
@@ -546,16 +550,14 @@ void run_analysis_stage(Driver& driver) {
     weights[t] = io::read_weights(file, "connectors/" + kind, R);
   }
   std::array<std::vector<std::pair<int, int>>, 2> pairs;
-  pairs[0] = collective::deploy_uniform_pairs(cfg);
+  pairs[0] = collective::deploy_uniform_pairs(D, def.connectors);
   {
     const std::vector<int32_t> dp = io::read_checked<int32_t>(file, "deploy/diverse_pairs", "pair,slot",
                                                               Dims{static_cast<hsize_t>(NP), 2},
                                                               std::to_string(NP) + " pairs, as deploy.pairs says");
     for (int q = 0; q < NP; ++q) pairs[1].emplace_back(dp[2 * q], dp[2 * q + 1]);
   }
-  std::vector<std::string> novel;
-  for (const auto& e : envs)
-    if (e != "flat") novel.push_back(e);
+  const std::vector<std::string> novel = novel_environments(D);
 
   io::h5::Node stage = file.group("analysis");
   for (const char* g : {"analysis/adversity", "analysis/familiarity"})
@@ -577,7 +579,7 @@ void run_analysis_stage(Driver& driver) {
       io::read_checked<double>(file, "deploy/collectives/travel_u", "env,type,replicate,pair", pairs_dims, pairs_why);
   deployed.pairs_status =
       io::read_checked<uint8_t>(file, "deploy/collectives/status", "env,type,replicate,pair", pairs_dims, pairs_why);
-  AdversityPlan adversity(cfg, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
+  AdversityPlan adversity(def, agents, weights, pairs, type_index, static_cast<int>(deploy_types.size()), novel,
                           std::move(deployed));
   driver.drive(adversity);
 
@@ -588,7 +590,7 @@ void run_analysis_stage(Driver& driver) {
     int K = 0;
     const int64_t fam_done = stage.has_attribute("familiarity_envs_done") ? stage.read_int("familiarity_envs_done") : 0;
     // analysis.familiarity_on: the hidden states (SPEC §8.2) or the network inputs at the same samples
-    const bool on_inputs = cfg.analysis.familiarity_on == "inputs";
+    const bool on_inputs = def.analysis.familiarity_on == "inputs";
     const int dim = on_inputs ? sim::kConnectorInputs : kHidden;
     const std::string what = on_inputs ? "/inputs" : "/states", axes = on_inputs ? "env,replicate,pair,sample,input"
                                                                                  : "env,replicate,pair,sample,neuron";
@@ -606,7 +608,7 @@ void run_analysis_stage(Driver& driver) {
                                                 std::to_string(dim) + (on_inputs ? " inputs" : " neurons"));
         K = static_cast<int>(d[3]);
       }
-    FamiliarityPlan familiarity(cfg, novel, std::move(hidden), K, dim);
+    FamiliarityPlan familiarity(def, novel, std::move(hidden), K, dim);
     driver.drive(familiarity);
   }
 }

@@ -67,18 +67,30 @@ struct Deployed {
   std::vector<uint8_t> alone_status, pairs_status;
 };
 
+// the config values the analyses read: the run's seed, the [analysis] section, the [deploy] section (its
+// environments, pairs, episode length, uniform agents and feature placement, as deploy ran them), from
+// [connectors] the replicates, batch_pairs and the weak connector's springs, and the run's physics
+struct AnalysisDef {
+  uint64_t seed = 0;
+  io::RunConfig::Analysis analysis;
+  io::RunConfig::Deploy deploy;
+  io::RunConfig::Connectors connectors;
+  sim::RunPhysics physics;  // run.contact, run.precision
+};
+AnalysisDef analysis_def(const io::RunConfig& cfg);
+
 // the adversity analysis (§8.1) as a plan. Per type of kAnalysisTypes: its weights (one per replicate), its pairs
-// and its index among deploy's `deploy_types` types; `novel`: the novel environments. It keeps references to
-// `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_adversity_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+// and its index among deploy's `deploy_types` types; `novel`: the novel environments. It keeps a reference to
+// `agents`, which must outlive it
+std::unique_ptr<Plan> make_adversity_plan(const AnalysisDef& def, const std::vector<morph::Agent>& agents,
                                           std::array<std::vector<std::vector<double>>, 2> weights,
                                           std::array<std::vector<std::pair<int, int>>, 2> pairs,
                                           std::array<int, 2> type_index, int deploy_types,
                                           std::vector<std::string> novel, Deployed deployed);
 
 // the familiarity analysis (§8.2) as a plan. `hidden`: deploy's states of the two types (E × R × NP × K × dim:
-// hidden states, dim 32, or the network inputs, dim 11). It keeps a reference to `cfg`, which must outlive it
-std::unique_ptr<Plan> make_familiarity_plan(const io::RunConfig& cfg, std::vector<std::string> novel,
+// hidden states, dim 32, or the network inputs, dim 11)
+std::unique_ptr<Plan> make_familiarity_plan(const AnalysisDef& def, std::vector<std::string> novel,
                                             std::array<std::vector<float>, 2> hidden, int K, int dim);
 
 }  // namespace divcoll::stages

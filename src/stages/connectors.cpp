@@ -439,8 +439,8 @@ std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vec
   return broadcast(driver, driver.master() ? plan->weights() : std::vector<std::vector<double>>{});
 }
 
-std::vector<morph::Agent> load_population(const io::RunConfig& cfg, const io::h5::Node& file,
-                                               const std::string& group) {
+std::vector<morph::Agent> load_population(const sim::RunPhysics& physics, const io::h5::Node& file,
+                                          const std::string& group) {
   // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
   // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
   const std::string at = io::anchors_path(group);
@@ -450,10 +450,8 @@ std::vector<morph::Agent> load_population(const io::RunConfig& cfg, const io::h5
   for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
   if (stored) io::read_anchors(file, at, agents);
   // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
-  if (!stored) {
-    const sim::RunPhysics physics = io::run_physics(cfg);
+  if (!stored)
     for (auto& a : agents) a.anchors = collective::compute_anchors(a, physics);
-  }
   return agents;
 }
 
@@ -469,12 +467,12 @@ void store_anchors(Driver& driver, const std::string& group, const std::vector<m
 }
 
 void run_connectors_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const ConnectorsDef def = connectors_def(driver.config());
   io::h5::File& file = driver.file();
-  const auto& C = cfg.connectors;
+  const auto& C = def.connectors;
   const std::vector<std::string>& kinds = C.kinds;
   const int K = static_cast<int>(kinds.size()), R = C.replicates;
-  const std::vector<morph::Agent> agents = load_population(cfg, file);
+  const std::vector<morph::Agent> agents = load_population(def.physics, file);
 
   io::h5::Node stage = file.group("connectors");
   stage.write_string("kinds", io::join(kinds));
@@ -484,7 +482,7 @@ void run_connectors_stage(Driver& driver) {
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::tether(cfg, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
+      slots.push_back({collective::tether(C, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(driver, agents, slots, spec);

@@ -41,20 +41,20 @@ void serialize(Ar& ar, DeployDone& d, unsigned) {
 // then every collective type × replicate × pair); the rows of round e are row e of every dataset
 class DeployPlan final : public Plan {
  public:
-  DeployPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, DeployTypes types)
-      : cfg_(cfg), D_(cfg.deploy), agents_(agents), types_(std::move(types.names)), weights_(std::move(types.weights)),
+  DeployPlan(const DeployDef& def, const std::vector<morph::Agent>& agents, DeployTypes types)
+      : def_(def), agents_(agents), types_(std::move(types.names)), weights_(std::move(types.weights)),
         tethers_(std::move(types.tethers)), diverse_(std::move(types.diverse)), E_(static_cast<int>(D_.environments.size())),
-        NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(cfg.connectors.replicates),
+        NP_(D_.pairs), pop_(static_cast<int>(agents.size())), R_(def_.connectors.replicates),
         T_(static_cast<int>(types_.size())), per_episode_(D_.episode_steps * 5),
         K_(D_.hidden_subsample == 0 ? per_episode_ : std::min(per_episode_, (D_.hidden_subsample + NP_ - 1) / NP_)),
-        early_(D_.early_step > 0), inputs_(cfg.analysis.familiarity_on == "inputs") {
+        early_(D_.early_step > 0), inputs_(def_.analysis.familiarity_on == "inputs") {
     // hidden states (SPEC §8.2) of the weak connectors deployed as trained, at most deploy.hidden_subsample
     // per (type, replicate, environment): K per episode, drawn from the episode's own stream
     for (int t = 0; t < T_; ++t)
       if (types_[t] == "weak_uniform@uniform" || types_[t] == "weak_diverse@diverse") hidden_types_.push_back(t);
-    Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
+    Rng prng = make_rng(def_.seed, kDeployStage, 0);
     diverse_pairs_ = collective::random_pairs(prng, pop_, NP_);
-    uniform_pairs_ = collective::deploy_uniform_pairs(cfg);
+    uniform_pairs_ = collective::deploy_uniform_pairs(D_, def_.connectors);
   }
   Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return E_; }
@@ -101,7 +101,7 @@ class DeployPlan final : public Plan {
     opt.record = early_;
     sim::RunResult full;
     if (e.type < 0) {
-      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(cfg_, agents_[e.a]));
+      o = collective::run_alone(sim_, agents_[e.a], env, physics_.contact, opt, &full, collective::alone_feature_offset(D_, agents_[e.a]));
       if (early_) d.early_bl = collective::travel_at(full, sim::kAgentMasses, D_.early_step) / morph::body_length(agents_[e.a]);
     } else {
       opt.record_hidden = hidden;
@@ -113,7 +113,7 @@ class DeployPlan final : public Plan {
       if (hidden) {
         // the episode's stream: (seed, deploy + 1, the episode's index in every environment's list)
         const uint64_t item = ((static_cast<uint64_t>(env_) * T_ + e.type) * R_ + e.replicate) * NP_ + e.pair;
-        Rng rng = make_rng(cfg_.run.seed, kDeployStage + 1, item);
+        Rng rng = make_rng(def_.seed, kDeployStage + 1, item);
         const std::vector<int64_t> picked = sorted_sample(rng, per_episode_, K_);
         d.hidden_index.assign(picked.begin(), picked.end());
         d.hidden.assign(d.hidden_index.size() * 32, std::numeric_limits<float>::quiet_NaN());
@@ -199,9 +199,9 @@ class DeployPlan final : public Plan {
   }
 
  private:
-  const io::RunConfig& cfg_;
-  const sim::RunPhysics physics_ = io::run_physics(cfg_);  // run.contact, run.precision
-  const io::RunConfig::Deploy& D_;
+  const DeployDef def_;
+  const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
+  const io::RunConfig::Deploy& D_ = def_.deploy;
   const std::vector<morph::Agent>& agents_;
   const std::vector<std::string> types_;
   const std::vector<std::vector<std::vector<double>>> weights_;  // [type][replicate] → params
@@ -222,29 +222,33 @@ class DeployPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+DeployDef deploy_def(const io::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.deploy, cfg.connectors, cfg.analysis, io::run_physics(cfg)};
+}
+
+std::unique_ptr<Plan> make_deploy_plan(const DeployDef& def, const std::vector<morph::Agent>& agents,
                                        DeployTypes types) {
-  return std::make_unique<DeployPlan>(cfg, agents, std::move(types));
+  return std::make_unique<DeployPlan>(def, agents, std::move(types));
 }
 
 void run_deploy_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const DeployDef def = deploy_def(driver.config());
   io::h5::File& file = driver.file();
-  const std::vector<morph::Agent> agents = load_population(cfg, file);
-  const int R = cfg.connectors.replicates;
+  const std::vector<morph::Agent> agents = load_population(def.physics, file);
+  const int R = def.connectors.replicates;
   DeployTypes types;
-  for (const std::string& kind : cfg.connectors.kinds) {
+  for (const std::string& kind : def.connectors.kinds) {
     DIVCOLL_THROW_UNLESS(file.has("connectors/" + kind + "/params"),
                          file.file() << " has no trained " << kind << " connectors: run the connectors stage first");
     const std::vector<std::vector<double>> reps = io::read_weights(file, "connectors/" + kind, R);
     for (const char* dep : {"uniform", "diverse"}) {
       types.names.push_back(kind + "@" + dep);
       types.weights.push_back(reps);
-      types.tethers.push_back(collective::tether(cfg, kind));
+      types.tethers.push_back(collective::tether(def.connectors, kind));
       types.diverse.push_back(std::string(dep) == "diverse");
     }
   }
-  DeployPlan plan(cfg, agents, std::move(types));
+  DeployPlan plan(def, agents, std::move(types));
   driver.drive(plan);
 }
 

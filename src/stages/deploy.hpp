@@ -38,10 +38,22 @@ struct DeployTypes {
   std::vector<bool> diverse;                               // [type]: on diverse pairs
 };
 
+// the config values the deployment reads: the run's seed, the [deploy] section, from [connectors] the replicates and
+// (deploy.uniform_agents = held_out) batch_pairs, analysis.familiarity_on (whether the connectors' inputs are kept
+// beside their hidden states) and the run's physics
+struct DeployDef {
+  uint64_t seed = 0;
+  io::RunConfig::Deploy deploy;
+  io::RunConfig::Connectors connectors;
+  io::RunConfig::Analysis analysis;
+  sim::RunPhysics physics;  // run.contact, run.precision
+};
+DeployDef deploy_def(const io::RunConfig& cfg);
+
 // the deployment as a plan: one round per environment, one item per episode (every agent alone, then every
-// collective type × replicate × pair); the rows of round e are row e of every dataset. It keeps references to
-// `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_deploy_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+// collective type × replicate × pair); the rows of round e are row e of every dataset. It keeps a reference to
+// `agents`, which must outlive it
+std::unique_ptr<Plan> make_deploy_plan(const DeployDef& def, const std::vector<morph::Agent>& agents,
                                        DeployTypes types);
 
 }  // namespace divcoll::stages

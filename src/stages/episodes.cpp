@@ -7,9 +7,9 @@
 
 namespace divcoll::stages {
 
-std::vector<std::string> novel_environments(const io::RunConfig& cfg) {
+std::vector<std::string> novel_environments(const io::RunConfig::Deploy& deploy) {
   std::vector<std::string> out;
-  for (const auto& e : cfg.deploy.environments)
+  for (const auto& e : deploy.environments)
     if (e != "flat") out.push_back(e);
   return out;
 }

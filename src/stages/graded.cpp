@@ -27,10 +27,14 @@ GradedShape graded_shape(const std::vector<evo::Individual>& main) {
   return g;
 }
 
-std::pair<AgentsDef, AgentsSpec> graded_agents(const io::RunConfig& cfg, int v, GradedShape shape) {
+GradedDef graded_def(const io::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.graded, cfg.agents, cfg.connectors, cfg.deploy, io::run_physics(cfg)};
+}
+
+std::pair<AgentsDef, AgentsSpec> graded_agents(const GradedDef& gdef, int v, GradedShape shape) {
   const std::string base = std::string("graded/") + kGradedPopulations[v];
-  AgentsDef def = agents_def(cfg);
-  def.agents.population = cfg.graded.population;
+  AgentsDef def{gdef.seed, gdef.agents, gdef.physics};
+  def.agents.population = gdef.graded.population;
   def.agents.body_fixed = true;
   def.agents.rest_moves = false;
   AgentsSpec spec;
@@ -42,20 +46,20 @@ std::pair<AgentsDef, AgentsSpec> graded_agents(const io::RunConfig& cfg, int v, 
   if (v == 1) {
     // no evolution: GP controllers from different seeds, each with a lineage's gradient budget
     def.agents.springs_fixed = true;
-    def.agents.epochs = (cfg.agents.generations + 1) * cfg.agents.epochs;
+    def.agents.epochs = (gdef.agents.generations + 1) * gdef.agents.epochs;
     def.agents.generations = 0;
     spec.fixed_springs = shape.springs;
   }
   return {def, spec};
 }
 
-std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, int v,
+std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const GradedDef& def, int v,
                                                       const std::vector<morph::Agent>& agents,
                                                       std::vector<std::vector<double>> weights,
                                                       std::vector<std::pair<int, int>> pairs) {
-  const std::vector<std::string>& envs = cfg.deploy.environments;
-  const int R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
-  const int GP = cfg.graded.population;
+  const std::vector<std::string>& envs = def.deploy.environments;
+  const int R = def.connectors.replicates, NP = def.deploy.pairs;
+  const int GP = def.graded.population;
   const std::string base = std::string("graded/") + kGradedPopulations[v];
   auto round_items = [R, GP, pairs = std::move(pairs)](int e) {
     std::vector<GroupEpisode> eps;
@@ -73,20 +77,21 @@ std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, 
   };
   const uint64_t uG = GP, uR = R, uN = NP;
   return std::make_unique<EpisodesPlan>(std::string("graded ") + kGradedPopulations[v] + " deploy", base, agents,
-                                        std::move(weights), collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
-                                        cfg.deploy.episode_steps,
+                                        std::move(weights), collective::tether(def.connectors, "weak_diverse"), def.physics, envs,
+                                        def.deploy.episode_steps,
                                         std::vector<EpisodesPlan::Part>{{base + "/deploy/agents", {uG}},
                                                                         {base + "/deploy/pairs", {uR, uN}}},
                                         round_items, summary);
 }
 
 void run_graded_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const GradedDef gdef = graded_def(driver.config());
+  const auto& C = gdef.connectors;
   io::h5::File& file = driver.file();
-  const int R = cfg.connectors.replicates, NP = cfg.deploy.pairs;
-  const int GP = cfg.graded.population;
+  const int R = C.replicates, NP = gdef.deploy.pairs;
+  const int GP = gdef.graded.population;
   io::h5::Node stage = file.group("graded");
-  stage.write_string("environments", io::join(cfg.deploy.environments));
+  stage.write_string("environments", io::join(gdef.deploy.environments));
   stage.write_string("populations", "same_shape,same_shape_springs");
 
   const GradedShape shape = graded_shape(io::read_final_population(file));
@@ -100,23 +105,23 @@ void run_graded_stage(Driver& driver) {
       file.group(base).write_string("diversity_sources", sources[v]);
 
       // 1. the population: one body (and for v = 1 one spring genotype), rest positions fixed
-      const auto [def, spec] = graded_agents(cfg, v, shape);
+      const auto [def, spec] = graded_agents(gdef, v, shape);
       driver.with_status(spec.group, [&] { run_agents(driver, def, spec); });
-      const std::vector<morph::Agent> agents = load_population(cfg, file, spec.group);
+      const std::vector<morph::Agent> agents = load_population(gdef.physics, file, spec.group);
 
       // 2. weak connectors trained on diverse pairs of this population, on flat (its anchors stored beside them)
       if (!file.has(base + "/connectors")) file.create_group(base + "/connectors");
       store_anchors(driver, spec.group, agents);
       std::vector<ConnectorSlot> slots;
       for (int r = 0; r < R; ++r)
-        slots.push_back({collective::tether(cfg, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
+        slots.push_back({collective::tether(C, "weak_diverse"), true, "flat", kGradedStage + 100000 * v + 50000 + r,
                          base + "/connectors/weak_diverse", r});
       TrainSpec ts{base + "/connectors", std::string("graded ") + kGradedPopulations[v] + " connectors",
-                   cfg.connectors.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
+                   C.iterations, C.batch_pairs, C.episode_steps};
       auto weights = train_connectors(driver, agents, slots, ts);
 
       // 3. agents alone and diverse pairs in every environment
-      Rng prng = make_rng(cfg.run.seed, kGradedStage + 100000 * v + 90000, 0);
+      Rng prng = make_rng(gdef.seed, kGradedStage + 100000 * v + 90000, 0);
       auto pairs = collective::random_pairs(prng, GP, NP);
       Record dp{base + "/diverse_pairs", {static_cast<uint64_t>(NP), 2}, {}, std::vector<int32_t>{}};
       for (int q = 0; q < NP; ++q) {
@@ -125,7 +130,7 @@ void run_graded_stage(Driver& driver) {
                                                          {pairs[q].first, pairs[q].second});
       }
       driver.write({dp});
-      const auto plan = make_graded_deploy_plan(cfg, v, agents, std::move(weights), std::move(pairs));
+      const auto plan = make_graded_deploy_plan(gdef, v, agents, std::move(weights), std::move(pairs));
       driver.drive(*plan);
     });
   }

@@ -40,13 +40,26 @@ struct GradedShape {
 };
 GradedShape graded_shape(const std::vector<evo::Individual>& main);
 
+// the config values the graded populations read: the run's seed, the [graded] section, the [agents] section they
+// start from, the [connectors] section (their weak diverse connectors' training), the [deploy] section and the
+// run's physics
+struct GradedDef {
+  uint64_t seed = 0;
+  io::RunConfig::Graded graded;
+  io::RunConfig::Agents agents;
+  io::RunConfig::Connectors connectors;
+  io::RunConfig::Deploy deploy;
+  sim::RunPhysics physics;  // run.contact, run.precision
+};
+GradedDef graded_def(const io::RunConfig& cfg);
+
 // population v's evolution: its config values (graded.population agents, one body, rest positions fixed; for
 // v = 1 one spring genotype and no evolution) and where it goes
-std::pair<AgentsDef, AgentsSpec> graded_agents(const io::RunConfig& cfg, int v, GradedShape shape);
+std::pair<AgentsDef, AgentsSpec> graded_agents(const GradedDef& def, int v, GradedShape shape);
 
 // population v's deployment as a plan: agents alone and its diverse `pairs` with its weak diverse-trained
 // connectors (`weights`, one per replicate) in every environment. It keeps a reference to `agents`
-std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const io::RunConfig& cfg, int v,
+std::unique_ptr<EpisodesPlan> make_graded_deploy_plan(const GradedDef& def, int v,
                                                       const std::vector<morph::Agent>& agents,
                                                       std::vector<std::vector<double>> weights,
                                                       std::vector<std::pair<int, int>> pairs);

@@ -19,17 +19,16 @@ namespace {
 // R..2R−1: weak diverse-trained
 class ScalingPlan final : public Plan {
  public:
-  ScalingPlan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents, std::vector<std::vector<double>> weights)
-      : cfg_(cfg), S_(cfg.scaling), agents_(agents), weights_(std::move(weights)),
-        tether_(collective::tether(cfg, "weak_uniform")), physics_(io::run_physics(cfg)),
-        E_(static_cast<int>(cfg.deploy.environments.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
-        R_(cfg.connectors.replicates), chains_(NS_ * 2) {
+  ScalingPlan(const ScalingDef& def, const std::vector<morph::Agent>& agents, std::vector<std::vector<double>> weights)
+      : def_(def), agents_(agents), weights_(std::move(weights)), tether_(collective::tether(def_.connectors, "weak_uniform")),
+        E_(static_cast<int>(envs_.size())), NS_(static_cast<int>(S_.sizes.size())), D_(S_.draws),
+        R_(def_.connectors.replicates), chains_(NS_ * 2) {
     const int pop = static_cast<int>(agents.size());
     for (int si = 0; si < NS_; ++si)
       for (int r = 0; r < R_; ++r)
         for (int q = 0; q < D_; ++q) {
           chains_[si * 2].push_back(std::vector<int32_t>(S_.sizes[si], q));
-          Rng rng = make_rng(cfg.run.seed, kScalingStage + si, static_cast<uint64_t>(r) * D_ + q);
+          Rng rng = make_rng(def_.seed, kScalingStage + si, static_cast<uint64_t>(r) * D_ + q);
           chains_[si * 2 + 1].push_back(distinct_agents(rng, pop, S_.sizes[si]));
         }
   }
@@ -40,7 +39,7 @@ class ScalingPlan final : public Plan {
   }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
-    return {{"environments", io::join(cfg_.deploy.environments)}, {"variants", std::string("uniform,diverse")}};
+    return {{"environments", io::join(envs_)}, {"variants", std::string("uniform,diverse")}};
   }
   Records setup() override {
     Records out = {{"scaling/sizes", {static_cast<uint64_t>(NS_)}, {}, std::vector<int64_t>{}}};
@@ -76,8 +75,8 @@ class ScalingPlan final : public Plan {
   // the 20-agent chains first, so that an environment's round ends on 5-agent ones
   std::vector<double> item_costs(int) const override { return costs_; }
   std::string compute(const std::string& bytes) override {
-    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, physics_,
-                              cfg_.deploy.environments, S_.episode_steps, true));
+    return pack(group_episode(sim_, unpack<GroupEpisode>(bytes), agents_, weights_, tether_, physics_, envs_,
+                              S_.episode_steps, true));
   }
   void reduce(int ei, int64_t, const std::string& bytes) override { done_[ei].push_back(unpack<EpisodeDone>(bytes)); }
   Records end_round(int ei) override {
@@ -89,7 +88,7 @@ class ScalingPlan final : public Plan {
     return {{"scaling/travel_u", dims, {ei}, tu}, {"scaling/travel_bl", dims, {ei}, tb}, {"scaling/status", dims, {ei}, st}};
   }
   std::string summary(int ei) const override {
-    std::string s = cfg_.deploy.environments[ei] + ":";
+    std::string s = envs_[ei] + ":";
     char b[160];
     for (int si = 0; si < NS_; ++si)
       for (int v = 0; v < 2; ++v) {
@@ -103,12 +102,13 @@ class ScalingPlan final : public Plan {
   }
 
  private:
-  const io::RunConfig& cfg_;
-  const io::RunConfig::Scaling& S_;
+  const ScalingDef def_;
+  const io::RunConfig::Scaling& S_ = def_.scaling;
+  const std::vector<std::string>& envs_ = def_.deploy.environments;
+  const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
   const std::vector<morph::Agent>& agents_;
   const std::vector<std::vector<double>> weights_;
   const collective::Tether tether_;  // the weak connector's springs
-  const sim::RunPhysics physics_;    // run.contact, run.precision
   const int E_, NS_, D_, R_;
   std::vector<std::vector<std::vector<int32_t>>> chains_;  // [size·2 + variant][replicate·D + draw]
   sim::Simulator sim_;
@@ -118,19 +118,23 @@ class ScalingPlan final : public Plan {
 
 }  // namespace
 
-std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+ScalingDef scaling_def(const io::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.scaling, cfg.deploy, cfg.connectors, io::run_physics(cfg)};
+}
+
+std::unique_ptr<Plan> make_scaling_plan(const ScalingDef& def, const std::vector<morph::Agent>& agents,
                                         std::vector<std::vector<double>> weights) {
-  return std::make_unique<ScalingPlan>(cfg, agents, std::move(weights));
+  return std::make_unique<ScalingPlan>(def, agents, std::move(weights));
 }
 
 void run_scaling_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const ScalingDef def = scaling_def(driver.config());
   io::h5::File& file = driver.file();
-  const int R = cfg.connectors.replicates;
-  const std::vector<morph::Agent> agents = load_population(cfg, file);
+  const int R = def.connectors.replicates;
+  const std::vector<morph::Agent> agents = load_population(def.physics, file);
   std::vector<std::vector<double>> weights = io::read_weights(file, "connectors/weak_uniform", R);
   for (auto& w : io::read_weights(file, "connectors/weak_diverse", R)) weights.push_back(std::move(w));
-  ScalingPlan plan(cfg, agents, std::move(weights));
+  ScalingPlan plan(def, agents, std::move(weights));
   driver.drive(plan);
 }
 

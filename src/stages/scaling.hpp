@@ -21,10 +21,21 @@ namespace divcoll::stages {
 
 inline constexpr uint64_t kScalingStage = io::stage_stream("scaling");
 
+// the config values the scaling chains read: the run's seed, the [scaling] section, deploy.environments, from
+// [connectors] the replicates and the weak connector's springs, and the run's physics
+struct ScalingDef {
+  uint64_t seed = 0;
+  io::RunConfig::Scaling scaling;
+  io::RunConfig::Deploy deploy;
+  io::RunConfig::Connectors connectors;
+  sim::RunPhysics physics;  // run.contact, run.precision
+};
+ScalingDef scaling_def(const io::RunConfig& cfg);
+
 // the chains as a plan: one round per environment, one item per chain (size × variant × replicate × draw).
-// `weights`: the weak uniform-trained replicates, then the weak diverse-trained ones. It keeps references to
-// `cfg` and `agents`, which must outlive it
-std::unique_ptr<Plan> make_scaling_plan(const io::RunConfig& cfg, const std::vector<morph::Agent>& agents,
+// `weights`: the weak uniform-trained replicates, then the weak diverse-trained ones. It keeps a reference to
+// `agents`, which must outlive it
+std::unique_ptr<Plan> make_scaling_plan(const ScalingDef& def, const std::vector<morph::Agent>& agents,
                                         std::vector<std::vector<double>> weights);
 
 }  // namespace divcoll::stages

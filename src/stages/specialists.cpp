@@ -14,13 +14,18 @@
 
 namespace divcoll::stages {
 
+SpecialistsDef specialists_def(const io::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.specialists, cfg.connectors, cfg.deploy, io::run_physics(cfg)};
+}
+
 void run_specialists_stage(Driver& driver) {
-  const io::RunConfig& cfg = driver.config();
+  const SpecialistsDef def = specialists_def(driver.config());
   io::h5::File& file = driver.file();
-  const auto& S = cfg.specialists;
-  const std::vector<std::string> envs = novel_environments(cfg);
-  const int E = static_cast<int>(envs.size()), R = S.replicates, NP = cfg.deploy.pairs;
-  const std::vector<morph::Agent> agents = load_population(cfg, file);
+  const auto& S = def.specialists;
+  const auto& C = def.connectors;
+  const std::vector<std::string> envs = novel_environments(def.deploy);
+  const int E = static_cast<int>(envs.size()), R = S.replicates, NP = def.deploy.pairs;
+  const std::vector<morph::Agent> agents = load_population(def.physics, file);
   const int pop = static_cast<int>(agents.size());
 
   io::h5::Node stage = file.group("specialists");
@@ -31,13 +36,13 @@ void run_specialists_stage(Driver& driver) {
   std::vector<ConnectorSlot> slots;
   for (int e = 0; e < E; ++e)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::tether(cfg, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
+      slots.push_back({collective::tether(C, "weak_diverse"), true, envs[e], kSpecialistsStage + e * R + r,
                        "specialists/" + envs[e], r});
-  TrainSpec spec{"specialists", "specialists", S.iterations, cfg.connectors.batch_pairs, cfg.connectors.episode_steps};
+  TrainSpec spec{"specialists", "specialists", S.iterations, C.batch_pairs, C.episode_steps};
   const std::vector<std::vector<double>> weights = train_connectors(driver, agents, slots, spec);
 
   // 2. deploy each in its environment on the deployment stage's diverse pairs: one round per environment
-  Rng prng = make_rng(cfg.run.seed, kDeployStage, 0);
+  Rng prng = make_rng(def.seed, kDeployStage, 0);
   const auto pairs = collective::random_pairs(prng, pop, NP);
   auto round_items = [&](int e) {
     std::vector<GroupEpisode> eps;
@@ -59,8 +64,8 @@ void run_specialists_stage(Driver& driver) {
                   bad ? (" (" + std::to_string(bad) + " episodes not ok)").c_str() : "");
     return std::string(b);
   };
-  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs,
-                    cfg.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
+  EpisodesPlan plan("specialists deploy", "specialists", agents, weights, collective::tether(C, "weak_diverse"), def.physics, envs,
+                    def.deploy.episode_steps, {{"specialists", {static_cast<uint64_t>(R), static_cast<uint64_t>(NP)}}},
                     round_items, summary);
   driver.drive(plan);
 }

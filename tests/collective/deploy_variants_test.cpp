@@ -13,42 +13,43 @@ namespace {
 
 TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   const io::RunConfig d = io::default_config();
-  EXPECT_EQ(collective::tether(d, "weak_uniform").stiffness, d.connectors.weak_stiffness);
-  EXPECT_EQ(collective::tether(d, "strong_diverse").stiffness, d.connectors.strong_stiffness);
-  EXPECT_EQ(collective::tether(d, "weak_diverse").amplitude, d.connectors.amplitude);
+  EXPECT_EQ(collective::tether(d.connectors, "weak_uniform").stiffness, d.connectors.weak_stiffness);
+  EXPECT_EQ(collective::tether(d.connectors, "strong_diverse").stiffness, d.connectors.strong_stiffness);
+  EXPECT_EQ(collective::tether(d.connectors, "weak_diverse").amplitude, d.connectors.amplitude);
   const io::RunConfig c = io::apply_overrides(
       d, {"connectors.amplitude=0.3", "connectors.weak_stiffness=700", "connectors.strong_stiffness=9000"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
-    EXPECT_EQ(collective::tether(c, kind).amplitude, 0.3) << kind;
-  EXPECT_EQ(collective::tether(c, "weak_diverse").stiffness, 700.0);
-  EXPECT_EQ(collective::tether(c, "strong_uniform").stiffness, 9000.0);
-  EXPECT_EQ(collective::strength_tether(c, "weak").stiffness, 700.0);
-  EXPECT_EQ(collective::strength_tether(c, "strong").amplitude, 0.3);
+    EXPECT_EQ(collective::tether(c.connectors, kind).amplitude, 0.3) << kind;
+  EXPECT_EQ(collective::tether(c.connectors, "weak_diverse").stiffness, 700.0);
+  EXPECT_EQ(collective::tether(c.connectors, "strong_uniform").stiffness, 9000.0);
+  EXPECT_EQ(collective::strength_tether(c.connectors, "weak").stiffness, 700.0);
+  EXPECT_EQ(collective::strength_tether(c.connectors, "strong").amplitude, 0.3);
   // connectors.damping: every kind's dashpot, 0 by default (SPEC §6.2)
-  EXPECT_EQ(collective::tether(d, "weak_uniform").damping, 0.0);
+  EXPECT_EQ(collective::tether(d.connectors, "weak_uniform").damping, 0.0);
   const io::RunConfig damped = io::apply_overrides(d, {"connectors.damping=12.5"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
-    EXPECT_EQ(collective::tether(damped, kind).damping, 12.5) << kind;
-  EXPECT_EQ(collective::strength_tether(damped, "weak").damping, 12.5);
+    EXPECT_EQ(collective::tether(damped.connectors, kind).damping, 12.5) << kind;
+  EXPECT_EQ(collective::strength_tether(damped.connectors, "weak").damping, 12.5);
   // connectors.follower: no stiffness for any kind, the rest kept
   const io::RunConfig follow = io::apply_overrides(damped, {"connectors.follower=true"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
-    EXPECT_EQ(collective::tether(follow, kind).stiffness, 0.0) << kind;
-    EXPECT_EQ(collective::tether(follow, kind).damping, 12.5) << kind;
-    EXPECT_EQ(collective::tether(follow, kind).amplitude, d.connectors.amplitude) << kind;
+    EXPECT_EQ(collective::tether(follow.connectors, kind).stiffness, 0.0) << kind;
+    EXPECT_EQ(collective::tether(follow.connectors, kind).damping, 12.5) << kind;
+    EXPECT_EQ(collective::tether(follow.connectors, kind).amplitude, d.connectors.amplitude) << kind;
   }
-  EXPECT_EQ(collective::strength_tether(follow, "strong").stiffness, 0.0);
-  EXPECT_THROW(collective::tether(c, "medium_uniform"), InputError);
-  EXPECT_THROW(collective::strength_tether(c, "medium"), InputError);
+  EXPECT_EQ(collective::strength_tether(follow.connectors, "strong").stiffness, 0.0);
+  EXPECT_THROW(collective::tether(c.connectors, "medium_uniform"), InputError);
+  EXPECT_THROW(collective::strength_tether(c.connectors, "medium"), InputError);
 }
 
 TEST(DeployUniformPairs, HeldOutAgentsFollowTheTrainingBatchAndNeverMeetIt) {
   const io::RunConfig c = io::apply_overrides(io::default_config(),
                                               {"agents.population=120", "connectors.batch_pairs=5", "deploy.pairs=20"});
-  const auto training = collective::deploy_uniform_pairs(c);
+  const auto training = collective::deploy_uniform_pairs(c.deploy, c.connectors);
   ASSERT_EQ(training.size(), 20u);
   for (size_t q = 0; q < training.size(); ++q) EXPECT_EQ(training[q], std::make_pair(int(q), int(q)));
-  const auto held = collective::deploy_uniform_pairs(io::apply_overrides(c, {"deploy.uniform_agents=held_out"}));
+  const io::RunConfig h = io::apply_overrides(c, {"deploy.uniform_agents=held_out"});
+  const auto held = collective::deploy_uniform_pairs(h.deploy, h.connectors);
   ASSERT_EQ(held.size(), 20u);
   for (size_t q = 0; q < held.size(); ++q) {
     EXPECT_EQ(held[q].first, held[q].second);

@@ -31,16 +31,16 @@ struct Case {
       for (const char* dep : {"uniform", "diverse"}) {
         t.names.push_back(kind + "@" + dep);
         t.weights.push_back(weights[k]);
-        t.tethers.push_back(collective::tether(cfg, kind));
+        t.tethers.push_back(collective::tether(cfg.connectors, kind));
         t.diverse.push_back(std::string(dep) == "diverse");
       }
     }
-    const auto deploy = make_deploy_plan(cfg, agents, t);
+    const auto deploy = make_deploy_plan(deploy_def(cfg), agents, t);
     deployed = test::written(run_serial(*deploy));
   }
   std::unique_ptr<Plan> adversity(bool damaged = false) const {
     std::array<std::vector<std::pair<int, int>>, 2> pairs;
-    pairs[0] = collective::deploy_uniform_pairs(cfg);
+    pairs[0] = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors);
     const std::vector<double>& dp = test::at(deployed, "deploy/diverse_pairs").values;
     for (int q = 0; q < 3; ++q) pairs[1].emplace_back(static_cast<int>(dp[2 * q]), static_cast<int>(dp[2 * q + 1]));
     Deployed d;
@@ -50,7 +50,7 @@ struct Case {
     for (double s : test::at(deployed, "deploy/collectives/status").values) d.pairs_status.push_back(static_cast<uint8_t>(s));
     if (damaged) d.pairs[5] += 1;
     // weak_uniform@uniform is deploy's type 0, weak_diverse@diverse its type 3
-    return make_adversity_plan(cfg, agents, weights, pairs, {0, 3}, 4, {"ice"}, std::move(d));
+    return make_adversity_plan(analysis_def(cfg), agents, weights, pairs, {0, 3}, 4, {"ice"}, std::move(d));
   }
   std::unique_ptr<Plan> familiarity() const {
     std::array<std::vector<float>, 2> hidden;
@@ -58,7 +58,7 @@ struct Case {
       for (double v : test::at(deployed, "deploy/hidden/" + kAnalysisTypes[t] + "/states").values)
         hidden[t].push_back(static_cast<float>(v));
     const int K = static_cast<int>(test::at(deployed, "deploy/hidden/" + kAnalysisTypes[0] + "/states").dims[3]);
-    return make_familiarity_plan(cfg, {"ice"}, std::move(hidden), K, 32);
+    return make_familiarity_plan(analysis_def(cfg), {"ice"}, std::move(hidden), K, 32);
   }
 };
 

@@ -27,7 +27,7 @@ struct Case {
     // as the connectors stage's runner makes them: connector c = kind·R + replicate
     for (int k = 0; k < static_cast<int>(C.kinds.size()); ++k)
       for (int r = 0; r < R; ++r)
-        slots.push_back({collective::tether(cfg, C.kinds[k]), C.kinds[k] == "weak_diverse", "flat",
+        slots.push_back({collective::tether(cfg.connectors, C.kinds[k]), C.kinds[k] == "weak_diverse", "flat",
                          kConnectorsStage + k * R + r, "connectors/" + C.kinds[k], r});
     spec = {"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   }

@@ -24,13 +24,13 @@ struct Case {
       for (const char* dep : {"uniform", "diverse"}) {
         t.names.push_back(kind + "@" + dep);
         t.weights.push_back(reps);
-        t.tethers.push_back(collective::tether(cfg, kind));
+        t.tethers.push_back(collective::tether(cfg.connectors, kind));
         t.diverse.push_back(std::string(dep) == "diverse");
       }
     }
     return t;
   }
-  std::unique_ptr<Plan> plan() const { return make_deploy_plan(cfg, agents, types()); }
+  std::unique_ptr<Plan> plan() const { return make_deploy_plan(deploy_def(cfg), agents, types()); }
 };
 
 TEST(DeployPlan, RecordsEveryEnvironmentsAgentsCollectivesAndHiddenStates) {
@@ -61,14 +61,14 @@ TEST(DeployPlan, EachEpisodeIsTheDirectSimulationOfItsAgentOrPair) {
   sim::RunOptions opt;
   opt.steps = c.cfg.deploy.episode_steps;
   opt.record = true;  // deploy.early_step > 0
-  const auto uniform = collective::deploy_uniform_pairs(c.cfg);
+  const auto uniform = collective::deploy_uniform_pairs(c.cfg.deploy, c.cfg.connectors);
   const std::vector<double>& pairs = test::at(d, "deploy/diverse_pairs").values;
   for (int e = 0; e < 2; ++e) {
     const std::string& env = c.cfg.deploy.environments[e];
     for (int i = 0; i < 4; ++i) {
       sim::RunResult full;
       const auto o = collective::run_alone(sim, c.agents[i], env, sim::ContactLaw::coulomb, opt, &full,
-                                           collective::alone_feature_offset(c.cfg, c.agents[i]));
+                                           collective::alone_feature_offset(c.cfg.deploy, c.agents[i]));
       EXPECT_TRUE(test::same_bits(test::at(d, "deploy/agents/travel_u").values[e * 4 + i], o.travel_u)) << env << i;
     }
     for (int t = 0; t < 4; ++t)

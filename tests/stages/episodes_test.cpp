@@ -16,7 +16,7 @@ namespace {
 struct Case {
   io::RunConfig cfg = test::tiny({"deploy.episode_steps=60", "deploy.pairs=2", "specialists.replicates=2"});
   std::vector<morph::Agent> agents = test::random_population(4);
-  std::vector<std::string> envs = novel_environments(cfg);
+  std::vector<std::string> envs = novel_environments(cfg.deploy);
   std::vector<std::vector<double>> weights;  // environment · R + replicate
   std::vector<std::pair<int, int>> pairs = {{0, 1}, {2, 3}};
   Case() {
@@ -35,7 +35,7 @@ struct Case {
     };
     auto summary = [](int, const std::vector<EpisodeDone>& d) { return std::to_string(ok_mean(d, 0, d.size()).first); };
     return std::make_unique<EpisodesPlan>("specialists deploy", "specialists", agents, weights,
-                                          collective::tether(cfg, "weak_diverse"), io::run_physics(cfg), envs, cfg.deploy.episode_steps,
+                                          collective::tether(cfg.connectors, "weak_diverse"), io::run_physics(cfg), envs, cfg.deploy.episode_steps,
                                           std::vector<EpisodesPlan::Part>{{"specialists", {2, 2}}}, round_items, summary);
   }
 };
@@ -57,7 +57,7 @@ TEST(EpisodesPlan, RecordsARowPerEnvironmentOfTheDirectPairEpisodes) {
     for (int r = 0; r < 2; ++r)
       for (int q = 0; q < 2; ++q) {
         const auto o = collective::run_pair(sim, c.agents[c.pairs[q].first], c.agents[c.pairs[q].second],
-                                            c.weights[e * 2 + r], collective::tether(c.cfg, "weak_diverse"), c.envs[e],
+                                            c.weights[e * 2 + r], collective::tether(c.cfg.connectors, "weak_diverse"), c.envs[e],
                                             sim::RunPhysics{}, c.cfg.deploy.episode_steps, false);
         EXPECT_TRUE(test::same_bits(test::at(d, "specialists/travel_u").values[(e * 2 + r) * 2 + q], o.travel_u));
         EXPECT_EQ(test::at(d, "specialists/status").values[(e * 2 + r) * 2 + q], static_cast<double>(o.status));

@@ -36,14 +36,14 @@ TEST(Graded, ThePopulationsEvolveOneBodyAndTheSecondOneSpringGenotypeWithoutEvol
   Rng rng = make_rng(8, 8, 8);
   const morph::Agent body = collective::random_agent(rng);
   const GradedShape shape{body.cells, body.springs};
-  const auto [def0, spec0] = graded_agents(cfg, 0, shape);
+  const auto [def0, spec0] = graded_agents(graded_def(cfg), 0, shape);
   EXPECT_EQ(spec0.group, "graded/same_shape/agents");
   EXPECT_EQ(def0.agents.population, 3);
   EXPECT_EQ(def0.agents.generations, cfg.agents.generations);
   EXPECT_TRUE(def0.agents.body_fixed);
   EXPECT_FALSE(def0.agents.rest_moves);
   EXPECT_EQ(spec0.fixed_springs, 0u);
-  const auto [def1, spec1] = graded_agents(cfg, 1, shape);
+  const auto [def1, spec1] = graded_agents(graded_def(cfg), 1, shape);
   EXPECT_EQ(spec1.group, "graded/same_shape_springs/agents");
   EXPECT_EQ(spec1.stream, kGradedStage + 100000);
   EXPECT_EQ(def1.agents.generations, 0);
@@ -64,7 +64,7 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
   Rng wr = make_rng(2, 2, 2);
   const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr)};
   const std::vector<std::pair<int, int>> pairs = {{0, 2}, {1, 0}};
-  auto make = [&] { return make_graded_deploy_plan(cfg, 0, agents, weights, pairs); };
+  auto make = [&] { return make_graded_deploy_plan(graded_def(cfg), 0, agents, weights, pairs); };
   const SerialRun run = run_serial(*make());
   EXPECT_EQ(run.items, 2 * (3 + 2));
   const test::Datasets d = test::written(run);
@@ -80,7 +80,7 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
       EXPECT_TRUE(test::same_bits(
           test::at(d, "graded/same_shape/deploy/pairs/travel_u").values[e * 2 + q],
           collective::run_pair(sim, agents[pairs[q].first], agents[pairs[q].second], weights[0],
-                               collective::tether(cfg, "weak_diverse"), env, sim::RunPhysics{}, cfg.deploy.episode_steps, false)
+                               collective::tether(cfg.connectors, "weak_diverse"), env, sim::RunPhysics{}, cfg.deploy.episode_steps, false)
               .travel_u));
   }
   SerialOptions o;

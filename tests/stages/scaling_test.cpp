@@ -24,7 +24,7 @@ struct Case {
       weights.push_back(morph::init_connector_params(rng));
     }
   }
-  std::unique_ptr<Plan> plan() const { return make_scaling_plan(cfg, agents, weights); }
+  std::unique_ptr<Plan> plan() const { return make_scaling_plan(scaling_def(cfg), agents, weights); }
 };
 
 TEST(ScalingPlan, RecordsTheChainsAndEveryEnvironmentsTravel) {
@@ -50,7 +50,7 @@ TEST(ScalingPlan, EachChainIsTheDirectSimulationOfItsAgents) {
   const Case c;
   const test::Datasets d = test::written(run_serial(*c.plan()));
   sim::Simulator sim;
-  const collective::Tether tether = collective::tether(c.cfg, "weak_uniform");
+  const collective::Tether tether = collective::tether(c.cfg.connectors, "weak_uniform");
   for (int e = 0; e < 2; ++e)
     for (int si = 0; si < 2; ++si) {
       const int n = si + 2;
