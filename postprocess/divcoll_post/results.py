@@ -59,6 +59,22 @@ KIND_LABEL = {
 # statistics
 
 
+def code_version() -> str:
+    """the commit of this postprocessing code ("<commit>-dirty" when postprocess/ has uncommitted changes; the
+    pages and figures a script has just written elsewhere do not count), or "unknown" outside a git checkout"""
+    import subprocess
+    here = os.path.dirname(os.path.abspath(__file__))
+    code = [os.path.dirname(here) + "/" + p for p in ("divcoll_post", "*.py")]
+    try:
+        commit = subprocess.run(["git", "-C", here, "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                                text=True, timeout=30).stdout.strip()
+        changed = subprocess.run(["git", "-C", here, "status", "--porcelain", "--"] + code, capture_output=True,
+                                 text=True, timeout=30).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return (commit + ("-dirty" if changed else "")) if commit else "unknown"
+
+
 def ok_values(travel, status) -> np.ndarray:
     """1-D array of the travels of the ok episodes (status == 0 and finite travel), in storage order."""
     travel = np.asarray(travel, dtype=float)

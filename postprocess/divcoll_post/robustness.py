@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import subprocess
 import sys
 import tomllib
 
 import numpy as np
 
 
-from . import single_run as S  # noqa: E402
+from . import results as R, single_run as S  # noqa: E402
 from . import verdict_page  # noqa: E402
 from . import verdicts as V  # noqa: E402
 from .reader import open_file, text  # noqa: E402
@@ -280,12 +279,7 @@ def provenance(runs):
     commits = set()
     for run in runs:
         commits |= run.commits()
-    try:
-        here = subprocess.run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "describe", "--always",
-                               "--dirty", "--abbrev=12"],
-                              capture_output=True, text=True, timeout=30).stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        here = "unknown"
+    here = R.code_version()
     return (f"Run files made by divcoll {', '.join(sorted(commits)) or '—'}; page written by postprocess/ at "
             f"{here}.")
 

@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import subprocess
 import tomllib
 from typing import Dict, List, Sequence
 
 import numpy as np
 
-from . import verdicts as V
+from . import results as R, verdicts as V
 
 MIN_POPULATIONS = 3
 # the earlier paper-scale seeds (10 connectors per kind, central stages), kept as run summaries only: shown as a check
@@ -262,12 +261,7 @@ def variance_components(pops):
 
 def provenance(folder, pops):
     commits = sorted({p.a.get("git_commit", "") for p in pops} - {""})
-    try:
-        here = subprocess.run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "describe", "--always",
-                               "--dirty", "--abbrev=12"], capture_output=True, text=True, timeout=30).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        here = ""
-    return commits, here or "unknown"
+    return commits, R.code_version()
 
 
 def check_paper_seeds(B):
