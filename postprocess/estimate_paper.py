@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import h5py
 
-from divcoll_post.runfile import STAGES  # noqa: E402
+from divcoll_post.reader import STAGES  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULTS = os.path.join(os.path.dirname(HERE), "configs", "paper.toml")  # every key's built-in default
 DEFAULT_GRAD_FACTOR = 2.6  # jobs/BENCHMARKS.md: a pair's forward steps/s over its forward+backward steps/s

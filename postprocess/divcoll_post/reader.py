@@ -18,7 +18,7 @@ Two ways in, over the same checked file (root attribute format = "divcoll-run", 
   shape or (where the file names them) its axes are not the expected ones; `list_attr` reads a list attribute
   (`environments`, `types`, ...: comma-joined strings as every stage writes them, or HDF5 string arrays);
   `stage_status`, `complete`, `require_stage` and `envs_done` say what a stage holds; `text` decodes an
-  attribute. `STAGES` is the pipeline's stage list.
+  attribute. `STAGES` is the pipeline's stage list, read from its one home, src/config/pipeline.hpp.
 
 Every dataset of a run file carries the attributes the run-file schema gives it (src/io/run_file.cpp,
 mpi/README.md "Run-file layout"): `axes` (its dimension names, comma separated), `unit`, `doc` and, for each
@@ -36,8 +36,10 @@ instead of a home-made index layer.
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import os
+import re
 from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -50,8 +52,35 @@ except ImportError as e:  # pragma: no cover - depends on the interpreter
     ) from e
 
 FORMAT = "divcoll-run"
-# the pipeline's stages in order (src/config/pipeline.hpp's stage list): every stage group a run file can hold
-STAGES = ["agents", "connectors", "deploy", "specialists", "scaling", "graded", "analysis"]
+PIPELINE_HPP = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src", "config", "pipeline.hpp")
+
+
+def pipeline_stages(path: str = PIPELINE_HPP) -> List[str]:
+    """the pipeline's stages in run order, read from their one home: the stage list DIVCOLL_STAGES of
+    src/config/pipeline.hpp, one line `X(name, stream, "reads")` per stage (this package lives in the repository
+    beside it)"""
+    try:
+        with builtins.open(path, encoding="utf-8") as f:  # this module defines its own open()
+            text = f.read()
+    except OSError as e:
+        raise RuntimeError(f"cannot read the pipeline's stage list from {os.path.normpath(path)}: {e.strerror} "
+                           "(postprocess/ reads it from the repository's src/config/pipeline.hpp)") from e
+    start = text.find("#define DIVCOLL_STAGES(X)")
+    body = text[start:].split("\n\n", 1)[0] if start >= 0 else ""
+    names = re.findall(r"^\s*X\((\w+),", body, re.M)
+    if not names:
+        raise RuntimeError(f"no stage list (#define DIVCOLL_STAGES(X) ...) in {os.path.normpath(path)}")
+    return names
+
+
+def __getattr__(name):
+    """`STAGES`, the pipeline's stages in order (every stage group a run file can hold), read on first use: the
+    labelled reader of an installed copy, which has no src/ beside it, never needs it"""
+    if name == "STAGES":
+        global STAGES
+        STAGES = pipeline_stages()
+        return STAGES
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class RunFileError(Exception):

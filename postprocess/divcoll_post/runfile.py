@@ -25,7 +25,6 @@ import numpy as np
 # the reader's basics, also reachable from here
 from .reader import (  # noqa: F401
     FORMAT,
-    STAGES,
     RunFileError,
     _decode,
     open_file,

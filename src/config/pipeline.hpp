@@ -17,9 +17,10 @@ namespace divcoll::io {
 
 // ---- stages --------------------------------------------------------------------------------------
 // The one stage list, in the order the stages run: X(name, first random stream id, the stages whose results
-// it reads (comma separated)). A stage's runner is mpi's run_<name>_stage (declared from this list in
-// mpi/driver.hpp, defined beside its plans); its rows are in the run-file schema (io/run_file.cpp). Adding
-// a stage: a line here, its runner and plans, its rows; `run.stages` and `divcoll run`'s checks follow.
+// it reads (comma separated)). A stage's runner is run_<name>_stage (declared from this list in
+// src/stages/driver.hpp, defined beside its plans in src/stages/<name>.cpp); its rows are in the run-file
+// schema (io/run_file.cpp). Adding a stage: a line here, its runner and plans, its rows; `run.stages`, `divcoll
+// run`'s checks and postprocess/'s stage list (divcoll_post.reader.STAGES reads the X(name, ...) lines) follow.
 // Streams: agents 1000 + generation; connectors 2000 + kind·R + replicate; deploy 3000 (pairs) and 3001
 // (hidden states); specialists 4000 + env·R + replicate; scaling 5000 + size; analysis 6000 + 1..3;
 // graded 1000000 + 100000·population (+ 50000 + replicate for its connectors, + 90000 for its pairs)

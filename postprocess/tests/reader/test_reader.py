@@ -138,6 +138,27 @@ class Reader(unittest.TestCase):
 
 @unittest.skipUnless(os.path.exists(BIN), f"no divcoll binary at {BIN} (set DIVCOLL_BINARY)")
 @unittest.skipUnless(HAVE_XARRAY, "xarray missing (Debian's python3-xarray; jobs/install-deps.sh installs it)")
+class StageList(unittest.TestCase):
+    def test_the_stages_are_the_pipelines_list_in_run_order(self):
+        """reader.STAGES is read from src/config/pipeline.hpp: the same names, in the same order, as the run.stages
+        default that the program writes into configs/paper.toml"""
+        import tomllib
+        from divcoll_post import reader
+        with open(os.path.join(POST, "..", "configs", "paper.toml"), "rb") as f:
+            self.assertEqual(reader.STAGES, tomllib.load(f)["run"]["stages"])
+
+    def test_a_missing_stage_list_is_named(self):
+        from divcoll_post import reader
+        with tempfile.TemporaryDirectory() as d:
+            with self.assertRaisesRegex(RuntimeError, "cannot read the pipeline's stage list"):
+                reader.pipeline_stages(os.path.join(d, "pipeline.hpp"))
+            path = os.path.join(d, "other.hpp")
+            with open(path, "w") as f:
+                f.write("#pragma once\n")
+            with self.assertRaisesRegex(RuntimeError, "no stage list"):
+                reader.pipeline_stages(path)
+
+
 class OfflineInstall(unittest.TestCase):
     def test_pip_install_without_an_index(self):
         """The README's command, on a copy of the package (the build writes into the source folder)."""
