@@ -64,7 +64,7 @@ TEST(ConfigPresets, PaperIsTheDefaults) {
   // and the defaults are the paper's counts
   const RunConfig& d = paper;
   EXPECT_EQ(d.run.seed, 1u);
-  EXPECT_EQ(d.run.stages.size(), 7u);
+  EXPECT_EQ(d.run.stages, stage_names());  // every stage of the pipeline, in its order
   EXPECT_EQ(d.analysis.dtw_every, 10);  // SPEC §8.1: every 10th step, band 10%
   EXPECT_EQ(d.analysis.dtw_band, 0.1);
   EXPECT_EQ(d.analysis.max_states, 10000);  // SPEC §8.2
