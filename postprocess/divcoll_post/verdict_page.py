@@ -475,6 +475,12 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
              "| reading | populations | what it stands for |", "|---|---|---|"]
     for v in cols:
         lines.append(f"| {v} | {', '.join(str(p.seed) for p in pops[v])} | {docs[v]} |")
+    planned = sorted(set(man["study"]["seeds"]))
+    short = [v for v in cols if len(pops[v]) < len(planned)]
+    if short:
+        lines += ["", f"**Interim**: {len(planned)} populations are planned per reading (seeds "
+                  f"{', '.join(map(str, planned))}); {', '.join(short)} have fewer so far, and their verdicts and "
+                  "differences can still move as the rest arrive."]
     lines += ["", "| id | claim | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
     for c in claims:
         row = [c.id, c.text]
