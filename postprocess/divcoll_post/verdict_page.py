@@ -475,7 +475,7 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
              "| reading | populations | what it stands for |", "|---|---|---|"]
     for v in cols:
         lines.append(f"| {v} | {', '.join(str(p.seed) for p in pops[v])} | {docs[v]} |")
-    planned = sorted(set(man["study"]["seeds"]))
+    planned = sorted({r["seed"] for r in man["run"]})
     short = [v for v in cols if len(pops[v]) < len(planned)]
     if short:
         lines += ["", f"**Interim**: {len(planned)} populations are planned per reading (seeds "
