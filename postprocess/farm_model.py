@@ -159,8 +159,8 @@ def main(argv=None):
     ap.add_argument("--paper", default=PAPER, help="config whose round sizes to model (default configs/paper.toml)")
     ap.add_argument("--ranks", type=int, nargs="+", default=[64, 512])
     ap.add_argument("--item-ms", type=float, nargs="+", default=[6.25],
-                    help="ms of one item (pair episode with gradient): 6.25 at 160k pair-steps/s (the engine since "
-                         "issue 10.3), 12.5 at dea5a14's 80k")
+                    help="ms of one item (pair episode with gradient): 6.25 at 160k pair-steps/s (the current "
+                         "engine), 12.5 at dea5a14's 80k")
     ap.add_argument("--cost", choices=["fit", "top"], default="fit",
                     help="c_serve from a fit over every rank count (default) or the largest rank count's row")
     ap.add_argument("--pairs-per-item", type=int, nargs="+", default=[1],
