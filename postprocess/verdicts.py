@@ -1,12 +1,13 @@
 """The verdict page of a study judged by the pre-registered protocol (configs/studies/verdicts_protocol.md).
 
-    /usr/bin/python3 postprocess/verdicts.py STUDY_DIR [--out DIR] [--resamples B] [--readings] [--readme README.md]
+    /usr/bin/python3 postprocess/verdicts.py STUDY_DIR [--out DIR] [--resamples B] [--readings | --states] [--readme README.md]
 
 STUDY_DIR is a study folder (`divcoll study --out`) or its kept copy (postprocess/gallery/studies/NAME): the page
 reads the `*.arrays.json` beside the run summaries, which `divcoll report STUDY_DIR` writes from the run files.
 Writes DIR/verdicts.md (default STUDY_DIR/verdicts) with its figures; with --readings, DIR/readings.md (default
 STUDY_DIR/readings): each variant of the study judged as its own family beside its baseline on the same populations
-(configs/studies/verdicts_readings.toml)."""
+(configs/studies/verdicts_readings.toml); with --states, DIR/states.md (default STUDY_DIR/states): the analysis
+claims of one population at each variant's state count (configs/studies/verdicts_states.toml)."""
 import argparse
 import os
 import sys
@@ -25,9 +26,13 @@ def main(argv=None):
                     help="also rewrite README's block between <!-- verdict table --> and <!-- /verdict table -->")
     ap.add_argument("--readings", action="store_true",
                     help="the readings page: every variant against the study's baseline on the same populations")
+    ap.add_argument("--states", action="store_true",
+                    help="the state-count page: one population's analysis claims at each variant's state count")
     a = ap.parse_args(argv)
     try:
-        if a.readings:
+        if a.states:
+            path = verdict_page.states_page(a.study, a.out or os.path.join(a.study, "states"))
+        elif a.readings:
             path = verdict_page.readings_page(a.study, a.out or os.path.join(a.study, "readings"), B=a.resamples)
         else:
             path = verdict_page.write(a.study, a.out or os.path.join(a.study, "verdicts"), B=a.resamples,

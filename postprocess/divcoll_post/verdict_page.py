@@ -545,3 +545,44 @@ def write_readme_table(readme: str, lines: List[str]) -> None:
     s = s[:a] + "\n" + "\n".join(lines) + "\n" + s[b:]
     with open(readme, "w") as fh:
         fh.write(s)
+
+
+def states_page(folder: str, out: str) -> str:
+    """the state-count page (configs/studies/verdicts_states.toml): one population deployed and analysed at several
+    state counts per environment; per claim that reads the analysis stage, its effect on that population at each
+    count with the single-run rule (one population: an effect and where it lies, no interval). The DTW claims do not
+    read the hidden states, so their equal values across the counts check that nothing else moved"""
+    from . import single_run
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(folder, "study.toml"), "rb") as fh:
+        man = tomllib.load(fh)
+    variants = [v for v in man["variant"] if V.load_study(folder, [v["name"]])]
+    if not variants:
+        raise ValueError(f"{folder}: no run with kept arrays")
+    pops = {v["name"]: V.load_study(folder, [v["name"]])[0] for v in variants}
+    seeds = sorted({p.seed for p in pops.values()})
+    commits = sorted({p.a.get("git_commit", "") for p in pops.values()} - {""})
+    claims = [c for c in V.CLAIMS if "analysis" in c.needs]
+    name = man["name"]
+    lines = ["# The familiarity claims at the paper's state count", "",
+             f"Study `{name}` ([configs/studies/{name}.toml](../../../configs/studies/{name}.toml)), population "
+             f"{', '.join(map(str, seeds))}: the same agents and connectors deployed and analysed with each number of "
+             "hidden states per environment and PaCMAP fit. One population, so each cell is that population's effect "
+             "and the single-run rule (held when the effect lies in the claim's region), not a verdict of the "
+             f"protocol. Run files made by divcoll {', '.join(commits) or '—'}; page by postprocess/ at "
+             f"{R.code_version()}.", "",
+             "| variant | overrides | what it stands for |", "|---|---|---|"]
+    for v in variants:
+        lines.append(f"| {v['name']} | {', '.join('`' + s + '`' for s in v.get('set', [])) or '—'} | {v.get('doc', '')} |")
+    cols = [v["name"] for v in variants]
+    lines += ["", "| id | claim | " + " | ".join(cols) + " |", "|---|---|" + "---|" * len(cols)]
+    for c in claims:
+        row = [c.id, c.text]
+        for v in cols:
+            _, e, verdict = single_run.evaluate(c, pops[v], "same_length")
+            row.append("—" if e is None else f"{num(e)} {c.unit}".rstrip() + f" · {verdict}")
+        lines.append("| " + " | ".join(row) + " |")
+    path = os.path.join(out, "states.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path

@@ -227,6 +227,25 @@ class Page(unittest.TestCase):
         finally:
             shutil.rmtree(d)
 
+    def test_the_states_page_gives_each_variants_effect_of_every_analysis_claim(self):
+        d = tempfile.mkdtemp()
+        try:
+            arrays = {v: {1: synthetic(1, np.random.Generator(np.random.PCG64(k)))} for k, v in ((5, "n10k"), (6, "n30k"))}
+            kept_study(d, arrays)
+            path = verdict_page.states_page(d, os.path.join(d, "states"))
+            with open(path) as fh:
+                md = fh.read()
+            rows = md_table(md, "| id | claim | n10k | n30k |")
+            analysis = [c for c in V.CLAIMS if "analysis" in c.needs]
+            self.assertEqual([r[0] for r in rows], [c.id for c in analysis])
+            for c, row in zip(analysis, rows):
+                for v, text in zip(("n10k", "n30k"), row[2:]):
+                    pop = V.Population(1, [arrays[v][1]])
+                    e = float(c.effect(pop, None, "same_length")[0])
+                    self.assertTrue(text.startswith(verdict_page.num(e)), (c.id, v, text, e))
+        finally:
+            shutil.rmtree(d)
+
     @unittest.skipUnless(os.path.exists(os.path.join(KEPT, "study.toml")), "no kept verdicts study")
     def test_the_committed_page_is_recomputed_from_the_kept_arrays(self):
         committed = os.path.join(os.path.dirname(HERE), "gallery", "verdicts", "verdicts.md")
