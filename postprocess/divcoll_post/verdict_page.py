@@ -296,7 +296,12 @@ class Judged:
 
     @property
     def planned(self) -> List[int]:
-        return sorted({r["seed"] for r in self.man["run"]})
+        return planned_seeds(self.man)
+
+
+def planned_seeds(man: dict) -> List[int]:
+    """the seeds a study's manifest plans runs for"""
+    return sorted({r["seed"] for r in man["run"]})
 
 
 def judge_study(folder: str, B: int = V.B_DEFAULT) -> Judged:
@@ -475,7 +480,7 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
              "| reading | populations | what it stands for |", "|---|---|---|"]
     for v in cols:
         lines.append(f"| {v} | {', '.join(str(p.seed) for p in pops[v])} | {docs[v]} |")
-    planned = sorted({r["seed"] for r in man["run"]})
+    planned = planned_seeds(man)
     short = [v for v in cols if len(pops[v]) < len(planned)]
     if short:
         lines += ["", f"**Interim**: {len(planned)} populations are planned per reading (seeds "
@@ -556,10 +561,11 @@ def states_page(folder: str, out: str) -> str:
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(folder, "study.toml"), "rb") as fh:
         man = tomllib.load(fh)
-    variants = [v for v in man["variant"] if V.load_study(folder, [v["name"]])]
+    loaded = {v["name"]: V.load_study(folder, [v["name"]]) for v in man["variant"]}
+    variants = [v for v in man["variant"] if loaded[v["name"]]]
     if not variants:
         raise ValueError(f"{folder}: no run with kept arrays")
-    pops = {v["name"]: V.load_study(folder, [v["name"]])[0] for v in variants}
+    pops = {v["name"]: loaded[v["name"]][0] for v in variants}
     seeds = sorted({p.seed for p in pops.values()})
     commits = sorted({p.a.get("git_commit", "") for p in pops.values()} - {""})
     claims = [c for c in V.CLAIMS if "analysis" in c.needs]
