@@ -40,6 +40,9 @@ struct Key {
   // the range, parsed from `range`
   double lo = 0, hi = 0;
   bool lo_open = false, hi_open = false;
+  // StringList: the allowed names said in words where listing them would change with a file (deploy.environments);
+  // empty: "any of" the choices
+  std::string choices_text = {};
 
   std::string full() const { return section + "." + name; }
 };
@@ -72,7 +75,7 @@ Key pick(const char* sec, const char* name, Type t, std::string def, std::vector
 Key envs_key(std::string def, std::vector<std::string> choices, const char* doc) {
   Key k = pick("deploy", "environments", Type::StringList, std::move(def), std::move(choices), doc,
                DIVCOLL_FIELD(deploy.environments));
-  k.range = "names of tables of configs/environments.toml (`divcoll envs`)";
+  k.choices_text = "names of tables of configs/environments.toml (`divcoll envs`)";
   return k;
 }
 
@@ -971,7 +974,7 @@ std::string allowed_text(const Key& k) {
     case Type::Choice:
       return "one of " + join(k.choices);
     case Type::StringList:
-      return k.range.empty() ? "any of " + join(k.choices) : k.range;
+      return k.choices_text.empty() ? "any of " + join(k.choices) : k.choices_text;
   }
   return "";
 }
@@ -1065,7 +1068,7 @@ std::string schema_markdown() {
       "|---|---|---|---|---|---|\n";
   for (const Key& k : schema()) {
     std::string def = k.def;
-    if (k.type == Type::StringList && k.range.empty() && def == string_list(k.choices)) def = "all";
+    if (k.type == Type::StringList && k.choices_text.empty() && def == string_list(k.choices)) def = "all";
     out += "| `" + k.full() + "` | " + type_text(k.type) + " | `" + def + "` | " + allowed_text(k) + " | " +
            k.unit + " | " + k.doc + " |\n";
   }
