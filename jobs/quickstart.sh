@@ -13,7 +13,7 @@ say "install: Debian packages for building and running (apt's output: out/logs/a
 bash jobs/install-deps.sh --log out/logs/apt.log | cut -c1-116 || fail "install" out/logs/apt.log
 source jobs/mpi-env.sh
 say "build: cmake, $(nproc) jobs (output: out/logs/build.log)"
-bash jobs/build.sh >out/logs/build.log 2>&1 || fail "build" out/logs/build.log
+bash jobs/build.sh --target divcoll >out/logs/build.log 2>&1 || fail "build" out/logs/build.log
 
 # the seven stages of the run, one line each. Their share of the quick run's time (2 ranks, measured
 # 2026-12-01: agents 5, connectors 42, deploy 31, specialists 22, scaling 9, graded 36, analysis 25 s) gives
