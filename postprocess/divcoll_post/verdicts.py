@@ -62,6 +62,20 @@ def extract(path: str) -> dict:
             kinds = list_attr(f["connectors"], "kinds")
             out["connectors"] = {"untrained_bl": {k: _lists(f[f"connectors/{k}/curve_bl"][()][0]) for k in kinds
                                                   if f"connectors/{k}/curve_bl" in f}}
+            # learning curves (iteration, replicate): the training batch's travel and, with keep_best, the
+            # validation batch's and the iteration whose weights were kept
+            curves = {}
+            for k in kinds:
+                g = f"connectors/{k}"
+                if f"{g}/curve_bl" not in f:
+                    continue
+                curves[k] = {"train_bl": _lists(f[f"{g}/curve_bl"][()])}
+                if f"{g}/val_bl" in f:
+                    curves[k]["val_bl"] = _lists(f[f"{g}/val_bl"][()])
+                if f"{g}/best_iteration" in f:
+                    curves[k]["best_iteration"] = _lists(f[f"{g}/best_iteration"][()])
+            out["connectors"]["curves"] = curves
+            out["connectors"]["wall_s"] = float(f["connectors"].attrs.get("wall_s", float("nan")))
         if complete(f, "deploy"):
             d = f["deploy"]
             envs, types = list_attr(d, "environments"), list_attr(d, "types")
@@ -72,6 +86,14 @@ def extract(path: str) -> dict:
             if "agents/travel_bl_early" in d and cfg.get("deploy", {}).get("early_step", 0) > 0:
                 dep["alone_bl_early"] = _lists(ok_means(d["agents/travel_bl_early"][()], d["agents/status"][()], 1)[0])
                 dep["early_step"] = cfg["deploy"]["early_step"]
+            if "references/travel_bl" in d:  # deploy.references: free, passive, follower on uniform and diverse pairs
+                ref, rok = ok_means(d["references/travel_bl"][()], d["references/status"][()], 2)  # (E, RT)
+                dep["references"] = list_attr(d, "references")
+                dep["references_bl"] = _lists(ref)
+                dep["references_ok"] = np.asarray(rok).tolist()
+                if "references/travel_bl_early" in d and "early_step" in dep:
+                    dep["references_bl_early"] = _lists(
+                        ok_means(d["references/travel_bl_early"][()], d["references/status"][()], 2)[0])
             out["deploy"] = dep
         if complete(f, "analysis"):
             a = f["analysis"]

@@ -12,6 +12,7 @@
 #include "cli/commands.hpp"
 #include "evo/connector_opt.hpp"
 #include "collective/deploy_variants.hpp"
+#include "collective/references.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "config/config.hpp"
@@ -69,7 +70,7 @@ int connector_opt(const ConnectorOptArgs& a) {
       collective::PlainTrainSpec spec{stiff,        ra.physics,      diverse,           C.iterations, C.batch_pairs,
                                       C.episode_steps, C.validation_pairs, cfg.run.seed, stream};
       const collective::PlainTrainResult tr =
-          collective::train_plain(sim, agents, os, morph::init_connector_params(wr, C.init_out_gain), spec);
+          collective::train_plain(sim, agents, os, collective::initial_connector_params(C, stiff.amplitude, wr), spec);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       for (size_t i = 0; i < tr.val_bl.size(); ++i)
         curves << a.label << ',' << kind << ',' << r << ',' << i << ','

@@ -12,6 +12,7 @@
 #include "cli/commands.hpp"
 #include "evo/connector_opt.hpp"
 #include "collective/deploy_variants.hpp"
+#include "collective/references.hpp"
 #include "common/check.hpp"
 #include "common/rng.hpp"
 #include "config/config.hpp"
@@ -91,7 +92,7 @@ int grad_diag(const GradDiagArgs& a) {
   // the stage's replicate 0 of this kind: its initial weights and its first batch
   const uint64_t stream = 2000 + static_cast<uint64_t>(kind) * C.replicates;
   Rng wr = make_rng(cfg.run.seed, stream, 1000000);
-  std::vector<double> theta = morph::init_connector_params(wr, C.init_out_gain);
+  std::vector<double> theta = collective::initial_connector_params(C, k.amplitude, wr);
   std::vector<std::pair<int, int>> batch;
   if (diverse) {
     Rng br = make_rng(cfg.run.seed, stream, 0);

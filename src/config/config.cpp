@@ -242,6 +242,16 @@ const std::vector<Key>& schema() {
         num("connectors", "init_out_gain", T::Double, "0.1", "[0, 10]", "",
             "initial weights of the connector's output layer ~ N(0, (gain·sqrt(2/(in+out)))²); 3 as the agent's, "
             "small = a nearly passive untrained connector", DIVCOLL_FIELD(connectors.init_out_gain)),
+        pick("connectors", "init", T::Choice, "\"random\"", {"random", "follower"},
+             "the weights training starts from: random = SPEC §6.3's random network (gains 2, 2 and "
+             "init_out_gain); follower = the hand-written follower policy (collective::follower_connector_params: "
+             "each spring's target length follows its length, src/collective/references.hpp) plus N(0, "
+             "init_noise²) on every weight, a reading of the paper's \"random neural controller\" that starts "
+             "training where a tether pulls little",
+             DIVCOLL_FIELD(connectors.init)),
+        num("connectors", "init_noise", T::Double, "0.01", "[0, 10]", "",
+            "init = follower: standard deviation of the Gaussian noise added to every weight of the follower "
+            "policy (drawn from the connector's own stream, as the random init)", DIVCOLL_FIELD(connectors.init_noise)),
         pick("connectors", "kinds", T::StringList, string_list(kKinds), kKinds, "connector kinds to train",
              DIVCOLL_FIELD(connectors.kinds)),
         pick("connectors", "lr_schedule", T::Choice, "\"constant\"", {"constant", "cosine", "exponential"},
@@ -305,6 +315,12 @@ const std::vector<Key>& schema() {
              "scene); pair_mean = (w + 0.05)/2 further, the mean runway of the two agents of a pair of its clones "
              "(w its body length); rear = w + 0.05 further, the runway of such a pair's rear agent. Collectives "
              "always get front", DIVCOLL_FIELD(deploy.feature_placement)),
+        flag("deploy", "references", "false",
+             "also deploy the three reference connectors, which need no training, on the same uniform and diverse "
+             "pairs in every environment: free (no tether: the agents side by side), passive (a weak connector "
+             "whose rest lengths stay fixed) and follower (a weak connector whose hand-written policy sets each "
+             "spring's target length to its length); deploy/references/* (src/collective/references.hpp)",
+             DIVCOLL_FIELD(deploy.references)),
         // [specialists]
         num("specialists", "replicates", T::Int, "10", "[1, 1000]", "",
             "weak connectors trained per novel environment", DIVCOLL_FIELD(specialists.replicates)),

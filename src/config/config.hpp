@@ -66,6 +66,8 @@ struct RunConfig {
     double clip_norm{};              // gradient norm clip
     std::string clip;                // global | per_pair: what clip_norm clips (the batch mean or each pair's gradient)
     double init_out_gain{};          // init gain of the connector network's output layer
+    std::string init;                // random | follower: the weights training starts from
+    double init_noise{};             // init = follower: sd of the noise on every weight
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
     std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
     double lr_final{};               // the rate at the last iteration as a fraction of lr (decaying schedules)
@@ -86,6 +88,7 @@ struct RunConfig {
     int early_step{};                       // also record travel at this step (0 = no)
     std::string uniform_agents;             // training | held_out: the agents of uniform deployments
     std::string feature_placement;          // front | pair_mean | rear: where an agent alone meets features
+    bool references{};                      // also deploy the reference connectors (free, passive, follower)
     bool operator==(const Deploy&) const = default;
   };
   struct Specialists {

@@ -21,6 +21,7 @@
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "collective/references.hpp"
 #include "common/check.hpp"
 #include "evo/connector_opt.hpp"
 #include "evo/optim.hpp"
@@ -88,7 +89,7 @@ class LockstepPlan : public ConnectorsPlan {
   }
   std::vector<double> initial_weights(int c) const {
     Rng rng = make_rng(def_.seed, slots_[c].stream, 1000000);
-    return morph::init_connector_params(rng, def_.connectors.init_out_gain);
+    return collective::initial_connector_params(def_.connectors, slots_[c].tether.amplitude, rng);
   }
   // one pair episode of weight vector t.weights of the round's weights_
   PairDone episode(const PairTask& t, const sim::RunOptions& ro) {

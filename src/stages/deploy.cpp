@@ -7,6 +7,7 @@
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "collective/references.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
 #include "stages/connectors.hpp"
@@ -52,6 +53,13 @@ class DeployPlan final : public Plan {
     // per (type, replicate, environment): K per episode, drawn from the episode's own stream
     for (int t = 0; t < T_; ++t)
       if (types_[t] == "weak_uniform@uniform" || types_[t] == "weak_diverse@diverse") hidden_types_.push_back(t);
+    // the reference connectors (deploy.references), each on uniform and on diverse pairs, after the trained types
+    if (D_.references)
+      for (std::string_view name : collective::kReferenceConnectors) {
+        refs_.push_back(collective::reference_connector(def_.connectors, name));
+        for (const char* dep : {"uniform", "diverse"}) ref_names_.push_back(std::string(name) + "@" + dep);
+      }
+    RT_ = static_cast<int>(ref_names_.size());
     Rng prng = make_rng(def_.seed, kDeployStage, 0);
     diverse_pairs_ = collective::random_pairs(prng, pop_, NP_);
     uniform_pairs_ = collective::deploy_uniform_pairs(D_, def_.connectors);
@@ -59,7 +67,9 @@ class DeployPlan final : public Plan {
   Info info() const override { return {"deploy", "deploy", "envs_done", "environment", "episodes", 1}; }
   int rounds() const override { return E_; }
   std::vector<Attribute> attributes() const override {
-    return {{"environments", io::join(D_.environments)}, {"types", io::join(types_)}};
+    std::vector<Attribute> a = {{"environments", io::join(D_.environments)}, {"types", io::join(types_)}};
+    if (RT_ > 0) a.push_back({"references", io::join(ref_names_)});
+    return a;
   }
   Records setup() override {
     Record r{"deploy/diverse_pairs", {static_cast<uint64_t>(NP_), 2}, {}, std::vector<int32_t>{}};
@@ -81,6 +91,12 @@ class DeployPlan final : public Plan {
           const auto& pr = diverse_[t] ? diverse_pairs_[q] : uniform_pairs_[q];
           items.push_back(pack(Episode{t, r, pr.first, pr.second, q}));
         }
+    // reference type T + rt: reference rt / 2 on uniform (rt even) or diverse (rt odd) pairs
+    for (int rt = 0; rt < RT_; ++rt)
+      for (int q = 0; q < NP_; ++q) {
+        const auto& pr = rt % 2 ? diverse_pairs_[q] : uniform_pairs_[q];
+        items.push_back(pack(Episode{T_ + rt, 0, pr.first, pr.second, q}));
+      }
     done_.assign(items.size(), {});
     return items;
   }
@@ -106,7 +122,10 @@ class DeployPlan final : public Plan {
     } else {
       opt.record_hidden = hidden;
       opt.record_inputs = hidden && inputs_;
-      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], weights_[e.type][e.replicate], tethers_[e.type], env, physics_.contact, opt, &full);
+      const bool ref = e.type >= T_;
+      const std::vector<double>& w = ref ? refs_[(e.type - T_) / 2].weights : weights_[e.type][e.replicate];
+      const collective::Tether& tether = ref ? refs_[(e.type - T_) / 2].tether : tethers_[e.type];
+      o = collective::run_pair(sim_, agents_[e.a], agents_[e.b], w, tether, env, physics_.contact, opt, &full);
       if (early_)
         d.early_bl = collective::travel_at(full, 2 * sim::kAgentMasses, D_.early_step) /
                      (0.5 * (morph::body_length(agents_[e.a]) + morph::body_length(agents_[e.b])));
@@ -135,8 +154,10 @@ class DeployPlan final : public Plan {
   void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<DeployDone>(bytes); }
   // row ei of every dataset
   Records end_round(int ei) override {
-    std::vector<double> au, ab, cu, cb, ae, ce;
-    std::vector<uint8_t> as, cs;
+    std::vector<double> au, ab, cu, cb, ae, ce, ru, rb, re;
+    std::vector<uint8_t> as, cs, rs;
+    ref_mean_.assign(RT_, 0.0), ref_ok_.assign(RT_, 0);
+    const size_t trained_end = static_cast<size_t>(pop_) + static_cast<size_t>(T_) * R_ * NP_;
     type_mean_.assign(T_, 0.0), type_ok_.assign(T_, 0), type_bad_.assign(T_, 0);
     std::vector<std::vector<float>> hid(hidden_types_.size());
     std::vector<std::vector<int32_t>> hid_index(hidden_types_.size());
@@ -144,6 +165,12 @@ class DeployPlan final : public Plan {
     for (size_t q = 0; q < done_.size(); ++q) {
       const DeployDone& dd = done_[q];
       const EpisodeDone& d = dd.done;
+      if (q >= trained_end) {  // a reference connector's pair
+        const int rt = static_cast<int>((q - trained_end) / NP_);
+        ru.push_back(d.travel_u), rb.push_back(d.travel_bl), rs.push_back(d.status), re.push_back(dd.early_bl);
+        if (d.status == 0 && std::isfinite(d.travel_bl)) ref_mean_[rt] += d.travel_bl, ++ref_ok_[rt];
+        continue;
+      }
       const bool alone = q < static_cast<size_t>(pop_);
       const int t = alone ? -1 : static_cast<int>((q - pop_) / (static_cast<size_t>(R_) * NP_));
       if (!dd.hidden_index.empty()) {
@@ -177,6 +204,13 @@ class DeployPlan final : public Plan {
       out.push_back({"deploy/agents/travel_bl_early", {E, P}, {ei}, ae});
       out.push_back({"deploy/collectives/travel_bl_early", {E, T, R, N}, {ei}, ce});
     }
+    if (RT_ > 0) {
+      const uint64_t RT = RT_;
+      out.push_back({"deploy/references/travel_u", {E, RT, N}, {ei}, ru});
+      out.push_back({"deploy/references/travel_bl", {E, RT, N}, {ei}, rb});
+      out.push_back({"deploy/references/status", {E, RT, N}, {ei}, rs});
+      if (early_) out.push_back({"deploy/references/travel_bl_early", {E, RT, N}, {ei}, re});
+    }
     for (size_t h = 0; h < hidden_types_.size(); ++h) {
       out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/states", {E, R, N, K, 32}, {ei}, hid[h]});
       out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/index", {E, R, N, K}, {ei}, hid_index[h]});
@@ -195,6 +229,10 @@ class DeployPlan final : public Plan {
                     type_bad_[t] ? (" (" + std::to_string(type_bad_[t]) + " not ok)").c_str() : "");
       s += b;
     }
+    for (int rt = 0; rt < RT_; ++rt) {
+      std::snprintf(b, sizeof b, " %s %.3f", ref_names_[rt].c_str(), ref_ok_[rt] ? ref_mean_[rt] / ref_ok_[rt] : NAN);
+      s += b;
+    }
     return s;
   }
 
@@ -211,6 +249,11 @@ class DeployPlan final : public Plan {
   const bool early_;  // deploy.early_step: travel at that step too (from the recorded run)
   const bool inputs_;  // analysis.familiarity_on = inputs: the connectors' inputs beside the hidden states
   std::vector<int> hidden_types_;
+  std::vector<collective::ReferenceConnector> refs_;  // deploy.references: free, passive, follower
+  std::vector<std::string> ref_names_;               // <name>@uniform, <name>@diverse per reference
+  int RT_ = 0;                                       // reference types: 2 per reference
+  std::vector<double> ref_mean_;
+  std::vector<int> ref_ok_;
   std::vector<std::pair<int, int>> diverse_pairs_, uniform_pairs_;
   sim::Simulator sim_;
   int env_ = 0;

@@ -3,11 +3,14 @@
 // environment of deploy.environments, without learning. One round of the task farm per environment,
 // a checkpoint after each.
 //
-// Run file (group /deploy; attributes status, environments, types, envs_done):
+// Run file (group /deploy; attributes status, environments, types, references, envs_done):
 //   diverse_pairs            (pairs × 2)            the fixed list of diverse deployment pairs
 //   agents/travel_bl, travel_u, status              (E × population)
 //   agents/travel_bl_early, collectives/travel_bl_early  the same at deploy.early_step (only when > 0; NaN unless ok)
 //   collectives/travel_bl, travel_u, status         (E × types × replicates × pairs)
+//   references/travel_bl, travel_u, status, travel_bl_early  (E × 2·3 × pairs)  with deploy.references: the reference
+//                            connectors free, passive, follower (src/collective/references.hpp), each on uniform and on
+//                            diverse pairs (attribute references), items after the trained types'
 //   hidden/<type>/states     (E × replicates × pairs × K × 32, float32)  connector hidden states (SPEC §8.2)
 //   hidden/<type>/index      (E × replicates × pairs × K)  which: step · 5 + connector spring
 //     for the weak connectors deployed as trained (weak_uniform@uniform, weak_diverse@diverse); K =

@@ -5,6 +5,7 @@
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "collective/references.hpp"
 #include "morph/body.hpp"
 #include "stages/stage_testing.hpp"
 
@@ -80,6 +81,50 @@ TEST(DeployPlan, EachEpisodeIsTheDirectSimulationOfItsAgentOrPair) {
         EXPECT_TRUE(test::same_bits(test::at(d, "deploy/collectives/travel_u").values[(e * 4 + t) * 3 + q], o.travel_u))
             << env << " " << types.names[t] << " " << q;
       }
+  }
+}
+
+TEST(DeployPlan, ReferenceConnectorsAreRecordedBesideAndDoNotChangeTheTrainedTypes) {
+  const Case plain;
+  Case refs;
+  refs.cfg = io::apply_overrides(refs.cfg, {"deploy.references=true"});
+  const test::Datasets without = test::written(run_serial(*plain.plan()));
+  const SerialRun run = run_serial(*refs.plan());
+  const test::Datasets with = test::written(run);
+  const uint64_t E = 2, P = 4, T = 4, R = 1, N = 3, RT = 6;  // free, passive, follower × uniform, diverse
+  EXPECT_EQ(run.items, static_cast<int64_t>(E * (P + T * R * N + RT * N)));
+  for (const char* s : {"travel_u", "travel_bl", "status", "travel_bl_early"})
+    EXPECT_EQ(test::at(with, std::string("deploy/references/") + s).dims, (std::vector<uint64_t>{E, RT, N})) << s;
+  // every dataset of the run without references has the same bits with them
+  for (const auto& [path, ds] : without) {
+    ASSERT_EQ(with.count(path), 1u) << path;
+    EXPECT_EQ(test::at(with, path).dims, ds.dims) << path;
+    for (size_t i = 0; i < ds.values.size(); ++i)
+      ASSERT_TRUE(test::same_bits(test::at(with, path).values[i], ds.values[i])) << path << " [" << i << "]";
+  }
+  // free on clones is each agent alone: on flat (no feature) the pair travels as its agent does alone
+  const auto uniform = collective::deploy_uniform_pairs(refs.cfg.deploy, refs.cfg.connectors);
+  const std::vector<double>& ref_u = test::at(with, "deploy/references/travel_u").values;
+  const std::vector<double>& alone_u = test::at(with, "deploy/agents/travel_u").values;
+  for (uint64_t q = 0; q < N; ++q) {
+    const double pair = ref_u[(0 * RT + 0) * N + q], alone = alone_u[0 * P + uniform[q].first];  // flat, free@uniform
+    EXPECT_NEAR(pair, alone, 1e-9 * (1 + std::abs(alone))) << "pair " << q;
+  }
+  // each reference episode is the direct simulation of its pair with the reference's weights and tether
+  sim::Simulator sim;
+  sim::RunOptions opt;
+  opt.steps = refs.cfg.deploy.episode_steps;
+  opt.record = true;
+  const std::vector<double>& pairs = test::at(with, "deploy/diverse_pairs").values;
+  for (uint64_t rt = 0; rt < RT; ++rt) {
+    const auto ref = collective::reference_connector(refs.cfg.connectors, collective::kReferenceConnectors[rt / 2]);
+    for (uint64_t q = 0; q < N; ++q) {
+      const int a = rt % 2 ? static_cast<int>(pairs[2 * q]) : uniform[q].first;
+      const int b = rt % 2 ? static_cast<int>(pairs[2 * q + 1]) : uniform[q].second;
+      const auto o = collective::run_pair(sim, refs.agents[a], refs.agents[b], ref.weights, ref.tether, "ice",
+                                          sim::ContactLaw::coulomb, opt, nullptr);
+      EXPECT_TRUE(test::same_bits(ref_u[(1 * RT + rt) * N + q], o.travel_u)) << rt << " " << q;
+    }
   }
 }
 
