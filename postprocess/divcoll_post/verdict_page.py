@@ -124,6 +124,13 @@ def fig2a(pops, path):
                 rows.append((label, where, *_mean_ci(pops, fn)))
             except KeyError:
                 pass
+    refs = [n for n in p0.references() if all(n in p.references() for p in pops)]
+    for n in refs:
+        for where in ("flat", "novel"):
+            def fn(p, d, pr, n=n, where=where):
+                x = p.references()[n]
+                return np.array([x[p.flat] if where == "flat" else x[p.novel].mean()])
+            rows.append((f"reference {n}", where, *_mean_ci(pops, fn)))
     for t in p0.types:
         for where in ("flat", "novel"):
             def fn(p, d, pr, t=t, where=where):
@@ -134,7 +141,8 @@ def fig2a(pops, path):
     for ax, where in zip(axes, ("flat", "novel")):
         rr = [r for r in rows if r[1] == where]
         for i, (lab, _, m, lo, hi, pts) in enumerate(rr):
-            col = "#2c7bb6" if "diverse@" in lab else "#fdae61" if "@" in lab else "#999999"
+            col = ("#b2abd2" if lab.startswith("reference") else "#2c7bb6" if "diverse@" in lab
+                   else "#fdae61" if "@" in lab else "#999999")
             ax.bar(i, m, color=col, alpha=0.6 if "strong" in lab else 1.0)
             ax.errorbar(i, m, yerr=[[m - lo], [hi - m]], color="k", capsize=2, lw=1)
             ax.plot(np.full(len(pts), i), pts, "k.", ms=2)
@@ -217,7 +225,7 @@ def supplement_figs(pops, out_dir):
         ax.set_title(f"Fig. S2 over {len(sp)} populations", fontsize=8)
         png = os.path.join(out_dir, "fig_s2.png")
         _save(plt, fig, png)
-        made.append(("Fig. S2", png, [(f"{e}: generalist", *r[1:4]) for e, *r in [(r[0], *r[1:]) for r in rows]]
+        made.append(("Fig. S2", png, [(f"{r[0]}: generalist", *r[1:4]) for r in rows]
                      + [(f"{r[0]}: best specialist", *r[4:7]) for r in rows]))
     sp = [p for p in pops if p.has("graded")]
     if len(sp) >= 2:
@@ -312,7 +320,127 @@ def judge_study(folder: str, B: int = V.B_DEFAULT) -> Judged:
             if any(p.has(s) for s in ("specialists", "scaling", "graded"))]
     if not main:
         raise ValueError(f"{folder}: no run with kept arrays (`*.arrays.json`; `divcoll report {folder}` writes them)")
-    return Judged(man, main, supp, judge_family(main, "M", B=B) + judge_family(supp, "S", B=B))
+    attach_references(main, references_folder(folder))
+    return Judged(man, main, supp, judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
+                  + judge_family(main, "A6", B=B))
+
+
+def references_folder(folder: str) -> str:
+    """the kept study of the reference connectors of a verdicts study's populations (verdicts_references.toml),
+    beside it: <folder>_references"""
+    return os.path.normpath(folder) + "_references"
+
+
+def attach_references(pops: Sequence[V.Population], ref_folder: str) -> List[int]:
+    """adds the reference connectors of `ref_folder`'s runs to the populations of the same seed that lack them, after
+    checking that the two runs deployed the same agents (every environment's agents-alone travel equal to the last
+    digit); returns the seeds attached. A population whose agents differ is refused with a message"""
+    if not os.path.exists(os.path.join(ref_folder, "study.toml")):
+        return []
+    done = []
+    by_seed = {p.seed: p for p in V.load_study(ref_folder, ["references"])}
+    for p in pops:
+        r = by_seed.get(p.seed)
+        if r is None or p.references() or "deploy" not in p.a:
+            continue
+        mine, theirs = p.a["deploy"], r.a["deploy"]
+        if mine["environments"] != theirs["environments"] or mine["alone_bl"] != theirs["alone_bl"]:
+            raise ValueError(f"{ref_folder}: seed {p.seed}'s agents alone differ from the study's: not the same agents")
+        for k in ("references", "references_bl", "references_ok", "references_bl_early"):
+            if k in theirs:
+                p.a["deploy"][k] = theirs[k]
+        done.append(p.seed)
+    return done
+
+
+def on_threshold(res: Sequence[V.Result], rel: float = 0.2) -> List[V.Result]:
+    """the claims whose Holm-adjusted p of either hypothesis lies within `rel` of α on either side: their verdict
+    turns on the last digits of the test"""
+    out = []
+    for r in res:
+        for p in (r.p_support_holm, r.p_contra_holm):
+            if np.isfinite(p) and abs(p - V.ALPHA) <= rel * V.ALPHA:
+                out.append(r)
+                break
+    return out
+
+
+def amendment_sections(j: Judged, B: int) -> List[str]:
+    """markdown: the claims on Holm's threshold, the verdicts that an amendment changes (A4's spread rule), and
+    amendment A6's statistics (C24b; C24c when a calibrated run exists)"""
+    lines = []
+    mine = [r for r in j.res if r.claim.family in ("M", "S")]
+    near = on_threshold(mine)
+    if near:
+        lines += ["", "**On Holm's threshold.** " + "; ".join(
+            f"{r.claim.id} ({r.verdict}): Holm p {r.p_support_holm:.4g} (supports) / {r.p_contra_holm:.4g} "
+            f"(contradicts) against α = {V.ALPHA}" for r in near)
+            + ". These verdicts turn on the last digits of the test: read them with the spread rule below and the "
+              "interval, not as settled."]
+    other = {r.claim.id: r for fam, pops in (("M", j.main), ("S", j.supp))
+             for r in V.judge(pops, [c for c in V.CLAIMS if c.family == fam], B=B, spread="sd")}
+    changed = [(r, other[r.claim.id]) for r in mine if r.claim.id in other and other[r.claim.id].verdict != r.verdict
+               and r.verdict != "too few populations"]
+    lines += ["", "## Where an amendment changes a verdict", "",
+              "Amendment A4 set the bootstrap's spread to the interquartile range / 1.349 after 3 of 10 populations; "
+              "under the rule it replaced (the resamples' standard deviation) these claims get another verdict "
+              "(every other claim keeps its verdict under both):", ""]
+    if changed:
+        lines += ["| id | claim | registered (A4: IQR) | before A4 (sd) |", "|---|---|---|---|"]
+        for r, o in changed:
+            lines.append(f"| {r.claim.id} | {r.claim.text} | {cell(r)} | {cell(o)} |")
+    else:
+        lines.append("none.")
+    a6 = [r for r in j.res if r.claim.family == "A6"]
+    if a6:
+        lines += ["", "## Amendment A6: wind's familiarity without the cell size", "",
+                  "C24's share of wind's fit in shared cells is 0.995-0.999 for every type at this program's cell size, "
+                  "so its margin of 0.02 cannot be reached whatever the connectors do. C24b compares the states that "
+                  "lie in cells of one source only, as a ratio (its own Holm family; the paper's ratio is "
+                  "(200,000 − 131,303) / (200,000 − 158,118) ≈ 1.64, ln 1.64 = 0.49). C24c, C24 at a cell scale "
+                  "calibrated to the paper's exclusive shares, needs runs with that scale (the confirmation study).",
+                  "", "| id | claim | paper | effect [95% interval] · verdict | per population |", "|---|---|---|---|---|"]
+        for r in a6:
+            pp = ", ".join(f"{s}: {v:.3g}" for s, v in r.per_population.items())
+            lines.append(f"| {r.claim.id} | {r.claim.text} | {r.claim.paper} | {cell(r)} | {pp or '—'} |")
+    return lines
+
+
+def reference_lines(pops: Sequence[V.Population]) -> List[str]:
+    """markdown: per population on flat, agents alone, the reference connectors and the weak connectors as trained,
+    in BL and as shares of agents alone (3000 steps)"""
+    have = [p for p in pops if p.references()]
+    if not have:
+        return ["", "No reference connectors for these populations (deploy.references; "
+                    "configs/studies/verdicts_references.toml computes them for the study's populations)."]
+    names = list(have[0].references())
+    cols = ["free@uniform", "passive@uniform", "follower@uniform", V.WU, "free@diverse", "passive@diverse",
+            "follower@diverse", V.WD]
+    lines = ["", "### Reference connectors, per population (flat, 3000 steps)", "",
+             "Beside agents alone and the weak connectors as trained, the connectors that need no training "
+             "(src/collective/references.hpp): *free* (no tether: the two agents side by side), *passive* (fixed rest "
+             "lengths), *follower* (each spring's target length follows its length). BL, and in brackets the share "
+             f"of agents alone. {len(have)} of {len(pops)} populations"
+             + (" (the others' runs did not deploy them)." if len(have) < len(pops) else "."), "",
+             "| population | agents alone | " + " | ".join(cols) + " |", "|---" * (len(cols) + 2) + "|"]
+    share = {c: [] for c in cols}
+    for p in have:
+        a = p.alone()[p.flat]
+        ref = p.references()
+        T = p.T(None)[0]
+        cells = []
+        for c in cols:
+            x = ref[c][p.flat] if c in ref else T[p.flat, p.types.index(c)] if c in p.types else float("nan")
+            share[c].append(x / a)
+            cells.append(f"{x:.2f} ({x / a:.0%})")
+        lines.append(f"| {p.seed} | {a:.2f} | " + " | ".join(cells) + " |")
+    lines.append("| mean share | | " + " | ".join(f"{np.nanmean(share[c]):.0%}" for c in cols) + " |")
+    fo = {c: np.array(share[c]) for c in cols}
+    lines += ["", f"Weak uniform as trained reaches {np.nanmean(fo[V.WU] / fo['follower@uniform']):.0%} of the "
+              f"follower's travel on clones, weak diverse {np.nanmean(fo[V.WD] / fo['follower@diverse']):.0%} on "
+              "diverse pairs (means over populations of the per-population ratios)."]
+    del names
+    return lines
 
 
 def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: bool = False) -> str:
@@ -322,7 +450,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
     j = judge_study(folder, B)
     man, main, supp, res = j.man, j.main, j.supp, j.res
     if readme:
-        write_readme_table(readme, readme_lines(j))
+        write_readme_table(readme, readme_lines(j, B))
     alone_claims = [c for c in V.CLAIMS if c.reads_alone]
     readings = {}
     for proto, _ in READINGS:
@@ -354,7 +482,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
     lines += ["| id | claim | paper | effect [95% interval] · verdict (same episode length) | training length | "
               "training rate | Holm p: supports / contradicts | t interval | per population |",
               "|---|---|---|---|---|---|---|---|---|"]
-    for r in res:
+    for r in [r for r in res if r.claim.family in ("M", "S")]:
         c = r.claim
         extra = []
         for proto, _ in READINGS:
@@ -365,6 +493,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
         hp = f"{r.p_support_holm:.3g} / {r.p_contra_holm:.3g}" if np.isfinite(r.p_support_holm) else "—"
         lines.append(f"| {c.id} | {c.text} ({c.where}) | {c.paper} | {cell(r)} | {extra[0]} | {extra[1]} | {hp} | "
                      f"{tci} | {pp or '—'} |")
+    lines += amendment_sections(j, B)
     lines += ["", "## Effects and margins", "", "| id | family | effect θ (positive = the paper's direction) | form | "
               "margin |", "|---|---|---|---|---|"]
     for c in V.CLAIMS:
@@ -385,6 +514,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
             ratio = "—" if "alone" in lab else f"{m / a3[2]:.2f} / " + (f"{m / a1[2]:.2f}" if a1 else "—")
             cells += [f"{m:.2f} [{lo:.2f}, {hi:.2f}]", ratio]
         lines.append(f"| {lab} | " + " | ".join(cells) + " |")
+    lines += reference_lines(main)
     rows3 = fig3a(main, os.path.join(fig_dir, "fig3a.png"))
     lines += ["", "## Fig. 3A", "", "![Fig. 3A](figures/fig3a.png)", "",
               "| type | agents | mean DTW per step, u [95% interval] |", "|---|---|---|"]
@@ -514,14 +644,23 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
 README_BEGIN, README_END = "<!-- verdict table -->", "<!-- /verdict table -->"
 
 
-def readme_lines(j: Judged) -> List[str]:
-    """the README's results: one row per claim (effect, interval, verdict)"""
+def readme_lines(j: Judged, B: int = V.B_DEFAULT) -> List[str]:
+    """the README's results: one row per claim (effect, interval, verdict), and for the claims that compare with
+    agents alone also the verdict with agents alone at their training length (1000 steps)"""
     planned = len(j.planned)
     main, supp, res = j.main, j.supp, j.res
+    alone_claims = [c for c in V.CLAIMS if c.reads_alone]
+    at1000 = {r.claim.id: r for fam, pops in (("M", main), ("S", supp))
+              for r in judge_family(pops, fam, "training_length", alone_claims, B=B)}
     lines = [f"Main text: {len(main)} of {planned} populations; supplement and Fig. 4: {len(supp)} of 5"
              + (" (interim: the study is still running, and verdicts can move as populations arrive)."
-                if len(main) < planned or len(supp) < 5 else "."), "",
-             "| | claim | paper | effect [95% interval] | verdict |", "|---|---|---|---|---|"]
+                if len(main) < planned or len(supp) < 5 else "."),
+             "Claims that compare with agents alone are judged at the same episode length (3000 steps, the registered "
+             "primary) and, in the last column, with agents alone at their training length (1000 steps): the paper's "
+             "agent numbers (\"almost four\", \"just over two\" BL) are this program's 1000-step values, so that is "
+             "the comparison the paper's figure most plausibly made.", "",
+             "| | claim | paper | effect [95% interval] | verdict | agents alone at 1000 steps |",
+             "|---|---|---|---|---|---|"]
     for r in res:
         c = r.claim
         if np.isfinite(r.lo):
@@ -531,13 +670,16 @@ def readme_lines(j: Judged) -> List[str]:
         else:
             eff = "—"
         vd = r.verdict + (f" ({r.reason})" if r.verdict == "not measured" and r.reason else "")
-        lines.append(f"| {c.id} | {c.text} | {c.paper} | {eff} | {vd} |")
+        o = at1000.get(c.id)
+        other = (f"{num(o.estimate)} [{num(o.lo)}, {num(o.hi)}] {c.unit}: {o.verdict}".replace(" :", ":")
+                 if o is not None and np.isfinite(o.lo) else "")
+        lines.append(f"| {c.id} | {c.text} | {c.paper} | {eff} | {vd} | {other} |")
     return lines
 
 
 def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
     """readme_lines of a kept verdicts study"""
-    return readme_lines(judge_study(folder, B))
+    return readme_lines(judge_study(folder, B), B)
 
 
 def write_readme_table(readme: str, lines: List[str]) -> None:

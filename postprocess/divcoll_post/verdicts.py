@@ -225,6 +225,18 @@ class Population:
             return x * st["connectors"] / st["deploy"]
         return x
 
+    def references(self, protocol="same_length"):
+        """{name@deployment: (E,) travel}: the reference connectors (free, passive, follower; deploy.references) of
+        this population, at 3000 steps or (training_length) at step 1000; {} when the runs did not deploy them"""
+        dep = self.a.get("deploy", {})
+        if "references" not in dep:
+            return {}
+        key = "references_bl_early" if protocol == "training_length" else "references_bl"
+        if key not in dep:
+            return {}
+        x = _arr(dep[key])  # (E, RT)
+        return {n: x[:, i] for i, n in enumerate(dep["references"])}
+
     def untrained(self, draws=None):
         """(b, kinds): each kind's batch travel before the first step, mean over (drawn) connectors"""
         u = self.a["connectors"]["untrained_bl"]
@@ -456,6 +468,14 @@ def e_wind_unfamiliar(p, d, pr):
     e = p.a["analysis"]["novel_environments"].index("wind")
     fd, fu = p.familiarity(WD, d)[:, e, :], p.familiarity(WU, d)[:, e, :]
     return fd[:, 0] / fd.sum(axis=1) - fu[:, 0] / fu.sum(axis=1)
+
+
+def e_wind_exclusive_ratio(p, d, pr):
+    """C24b (amendment A6): ln(E wu@u / E wd@d), E the wind fit's states in cells holding one source only"""
+    e = p.a["analysis"]["novel_environments"].index("wind")
+    fd, fu = p.familiarity(WD, d)[:, e, :], p.familiarity(WU, d)[:, e, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log((fu[:, 1] + fu[:, 2]) / (fd[:, 1] + fd[:, 2]))
 
 
 def e_scaling_grows(p, d, pr):
@@ -800,6 +820,12 @@ CLAIMS: List[Claim] = [
           ("analysis",), e_wind_unfamiliar,
           counts=N_ANALYSIS, describe=d_wind,
           episodes=("", False, "pair", "wind")),
+    # amendment A6: judged in a family of its own, so that family M's Holm adjustments stay as registered
+    Claim("C24b", "A6", "Wind meets more exclusive states with the uniform-trained connector (scale-free)",
+          "Fig. 3B-C", "ratio ≈ 1.64", "ln(exclusive states of wind's fit, wu@u / wd@d)", "greater", math.log(1.1),
+          "", ("analysis",), e_wind_exclusive_ratio,
+          counts=N_ANALYSIS, describe=d_wind,
+          episodes=("", False, "pair", "wind")),
     Claim("C25", "S", "The advantage of diversity grows with collective size", "Fig. 4", "Fig. 4",
           "adv(20) − adv(5), adv = N(diverse chains) − N(uniform chains)", "greater", BL, "BL", ("scaling",),
           e_scaling_grows,
@@ -923,7 +949,7 @@ def _t975(n):
     return float(tdist.ppf(0.975, n - 1))
 
 
-def interval(point, th):
+def interval(point, th, spread="iqr"):
     """(estimate, standard error, 95% low, high) of the mean of the per-population effects `point` from the
     bootstrap's resampled means `th`: the spread of the resamples as their interquartile range / 1.349 (the
     normal's sd, so that the rare resamples where a ratio's denominator nears 0 do not set it; amendment A4),
@@ -931,15 +957,19 @@ def interval(point, th):
     degrees of freedom (protocol §3, amendment A2)"""
     n = len(point)
     est = float(np.mean(point))
-    q25, q75 = np.quantile(th, [0.25, 0.75])
-    se = float((q75 - q25) / 1.349 * math.sqrt(n / (n - 1)))
+    if spread == "sd":  # the rule before amendment A4: the resamples' standard deviation
+        se = float(np.std(th, ddof=1) * math.sqrt(n / (n - 1)))
+    else:
+        q25, q75 = np.quantile(th, [0.25, 0.75])
+        se = float((q75 - q25) / 1.349 * math.sqrt(n / (n - 1)))
     q = _t975(n)
     return est, se, est - q * se, est + q * se
 
 
 def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_length", B=B_DEFAULT,
-          seed=BOOT_SEED, alpha=ALPHA) -> List[Result]:
-    """every claim of one family over the populations that have its stages; Holm over the family's hypotheses"""
+          seed=BOOT_SEED, alpha=ALPHA, spread="iqr") -> List[Result]:
+    """every claim of one family over the populations that have its stages; Holm over the family's hypotheses.
+    spread: the bootstrap spread rule of the standard error (iqr, the registered one since A4; sd, the one before)"""
     results = []
     for k, c in enumerate(claims):
         ps = [p for p in pops if all(p.has(s) for s in c.needs)]
@@ -963,7 +993,7 @@ def judge(pops: Sequence[Population], claims: Sequence[Claim], protocol="same_le
             continue
         n = len(ps)
         r.per_population = {p.seed: float(v) for p, v in zip(ps, point)}
-        r.estimate, r.se, r.lo, r.hi = interval(point, th)
+        r.estimate, r.se, r.lo, r.hi = interval(point, th, spread)
         half = _t975(n) * np.std(point, ddof=1) / math.sqrt(n)
         r.t_lo, r.t_hi = r.estimate - half, r.estimate + half
         r.p_support, r.p_contra = hypotheses(c.form, c.margin, c.band, r.estimate, r.se, n - 1)
