@@ -36,10 +36,13 @@ rc=${PIPESTATUS[0]}
 set -e
 [ "$rc" -eq 0 ] || fail "run (exit $rc)" out/logs/run.log
 
+# the demo runs beside the report (each mostly one core; the report's movie clips share the cores too)
 say "report: out/report/report.html and report.md, figures, movies (output: out/logs/report.log)"
+build/divcoll demo --run out/quick.h5 --out out/demo --movie >out/logs/demo.log 2>&1 &
+demo_pid=$!
 build/divcoll report out/quick.h5 --out out/report --movie >out/logs/report.log 2>&1 || fail "report" out/logs/report.log
 grep -E "^(divcoll: Python|report: wrote)" out/logs/report.log | cut -c1-116
 say "demo: the run's trained agents and connector, walking (out/demo/demo.mp4)"
-build/divcoll demo --run out/quick.h5 --out out/demo --movie >out/logs/demo.log 2>&1 || fail "demo" out/logs/demo.log
+wait "$demo_pid" || fail "demo" out/logs/demo.log
 grep -A2 '^environment' out/logs/demo.log | cut -c1-116
 say "done. Open out/report/report.html in a browser; the run file is out/quick.h5."

@@ -25,6 +25,7 @@ Frames are 1280 × 720 (--quick: fewer frames and environments, for tests).
 Exit status: 0 done; 2 bad input (not a run file, a missing stage, no ffmpeg) with a message.
 """
 import argparse
+import functools
 import os
 import re
 import shutil
@@ -318,8 +319,37 @@ class RunFile:
         return traj
 
 
+_JOBS = []  # the renders run_parallel hands to its forked workers (closures need no pickling after a fork)
+
+
+def _run_job(i):
+    _JOBS[i]()
+    return i
+
+
+def run_parallel(jobs, workers=None):
+    """runs zero-argument render jobs, each writing its own file, on `workers` forked processes (default: every
+    core, at most the job count); one core or one job runs them in this process"""
+    global _JOBS
+    workers = min(len(jobs), workers or os.cpu_count() or 1)
+    if workers <= 1:
+        for j in jobs:
+            j()
+        return
+    import multiprocessing
+    _JOBS = list(jobs)
+    try:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            pool.map(_run_job, range(len(_JOBS)), chunksize=1)
+    finally:
+        _JOBS = []
+
+
 def supplementary(runpath, out_dir, divcoll, quick=False):
+    """the paper's Supplementary Movie from a run file: its episodes are exported and simulated first, then every
+    title card and clip is rendered, on every core at once (run_parallel), and the parts are joined"""
     os.makedirs(out_dir, exist_ok=True)
+    jobs = []
     work = os.path.join(out_dir, "episodes")
     os.makedirs(work, exist_ok=True)
     r = RunFile(runpath, divcoll, work)
@@ -339,9 +369,9 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
     def part(k, card_lines, stem, heading, strip):
         """a title card and the clips under a curve strip: [card path, part path]"""
         card = os.path.join(out_dir, f"card{k}.mp4")
-        title_card(card, card_lines, quick)
+        jobs.append(functools.partial(title_card, card, card_lines, quick))
         path = os.path.join(out_dir, stem + ".mp4")
-        render(path, clips, heading, quick, every, below=curve_strip(*strip))
+        jobs.append(functools.partial(render, path, clips, heading, quick, every, below=curve_strip(*strip)))
         return [card, path]
 
     parts += part(1, ["1. Agent optimisation", "evolution of bodies + gradient descent on controllers",
@@ -371,8 +401,9 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
     dep_steps = int(r.cfg["deploy"]["episode_steps"])
     envs = [e for e in PREFERRED if e in r.envs][: (2 if quick else 6)]
     card = os.path.join(out_dir, "card3.mp4")
-    title_card(card, ["3. Deployment: uniform vs diverse", "no learning; flat is the training environment",
-                      ", ".join(e.replace("_", " ") for e in envs)], quick)
+    jobs.append(functools.partial(title_card, card, ["3. Deployment: uniform vs diverse",
+                                                     "no learning; flat is the training environment",
+                                                     ", ".join(e.replace("_", " ") for e in envs)], quick))
     parts.append(card)
     p3s = []
     for env in envs:
@@ -383,9 +414,11 @@ def supplementary(runpath, out_dir, divcoll, quick=False):
                               "--pair", "0", "--replicate", "0")
             clips.append(Clip(sc, r.simulate(sc, dep_steps), label, stored_bl=st))
         p = os.path.join(out_dir, f"deployment_{env}.mp4")
-        render(p, clips, f"Deployment in {env.replace('_', ' ')}: uniform vs diverse ({dep_steps} steps)", quick,
-               every * 2)
+        jobs.append(functools.partial(render, p, clips,
+                                      f"Deployment in {env.replace('_', ' ')}: uniform vs diverse ({dep_steps} steps)",
+                                      quick, every * 2))
         p3s.append(p)
+    run_parallel(jobs)
     p3 = os.path.join(out_dir, "deployment.mp4")
     concat(p3s, p3)
     parts += p3s
