@@ -80,7 +80,7 @@ inline const GradientPair& gradient_pair() {
     f.a = collective::random_agent(rng);
     f.p.anchors = collective::compute_anchors(f.p, kSpec, {}, 300);
     f.a.anchors = collective::compute_anchors(f.a, kSpec, {}, 300);
-    f.conn = morph::init_connector_params(rng);
+    f.conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
     for (double& w : f.conn) w += 0.05 * normal(rng);
     return f;
   }();

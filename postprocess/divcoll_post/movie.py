@@ -50,11 +50,40 @@ from . import animate  # noqa: E402
 STRAIN = 0.3  # colour scale of spring strain, ±
 PREFERRED = ["flat", "wind", "ice", "treadmill", "step_up", "sand", "gap", "obstacle", "sticky", "low_gravity",
              "incline", "decline", "step_down"]
-CUE = {"flat": "flat ground (training)", "ice": "ice: friction 0.1", "sand": "sand: damping 20, slip",
-       "sticky": "sticky: friction 3, adhesion", "treadmill": "treadmill: ground moves back 0.05 u/s",
-       "low_gravity": "low gravity: g = −0.25", "wind": "wind: 2 sin(2πt/4 s) u/s²", "gap": "gap: pit 0.08 u wide",
-       "obstacle": "obstacle: block 0.04 u high", "step_up": "step up 0.04 u", "step_down": "step down 0.06 u",
-       "incline": "incline: slope +0.2", "decline": "decline: slope −0.2"}
+ENVIRONMENTS_TOML = os.path.join(CHECKOUT, "configs", "environments.toml")
+UNITS = {"gravity": "u/s²", "damping": "1/s", "belt_speed": "u/s", "wind_amp": "u/s²", "wind_period": "s",
+         "adhesion": "u/s²", "adhesion_band": "u"}
+
+
+def cue(env, path=ENVIRONMENTS_TOML):
+    """the caption of environment `env`, written from its table in configs/environments.toml: what differs from the
+    [defaults] table (a terrain as its first feature), so that an environment added to the file is captioned too"""
+    try:
+        with open(path, "rb") as fh:
+            table = tomllib.load(fh)
+    except OSError:
+        return env
+    if env not in table:
+        return env
+    d, e = table.get("defaults", {}), table[env]
+    bits = []
+    for k, v in e.items():
+        if k == "terrain" or v == d.get(k):
+            continue
+        bits.append(f"{k.replace('_', ' ')} {v:.3g}{(' ' + UNITS[k]) if k in UNITS else ''}")
+    segs = e.get("terrain", [])
+    if segs:
+        dx, y, slope = segs[0]
+        if slope:
+            bits.append(f"slope {slope:+g}")
+        elif len(segs) > 1:
+            bits.append(f"feature {segs[1][0] - dx:g} u long at height {y:+g} u")
+        elif y:
+            bits.append(f"step {y:+g} u")
+    name = env.replace("_", " ") + (" (training)" if env == "flat" else "")
+    return name + (": " + ", ".join(bits) if bits else "")
+
+
 GROUND = {"ice": "#cfe8f7", "sand": "#ecd9a0", "sticky": "#b9d3a0", "treadmill": "#c9c9c9"}
 
 
@@ -161,7 +190,7 @@ def draw_panel(ax, clip, t, half_width):
     ax.text(0.01, 0.02, f"travel {clip.travel_bl(t):+.2f} BL{done}", transform=ax.transAxes, fontsize=11,
             fontweight="bold", va="bottom", zorder=7,
             bbox=dict(facecolor="white", alpha=0.8, edgecolor="none", pad=2))
-    ax.text(0.99, 0.98, CUE.get(ep.env, ep.env), transform=ax.transAxes, fontsize=10, ha="right", va="top", zorder=7,
+    ax.text(0.99, 0.98, cue(ep.env), transform=ax.transAxes, fontsize=10, ha="right", va="top", zorder=7,
             bbox=dict(facecolor="white", alpha=0.8, edgecolor="none", pad=2))
     return lc
 

@@ -48,7 +48,7 @@ Fixture make_fixture(int n_agents, uint64_t seed) {
     f.agents.push_back(collective::random_agent(rng));
     f.agents.back().anchors = collective::compute_anchors(f.agents.back(), kSpecPhysics, {}, 300);
   }
-  f.conn = morph::init_connector_params(rng);
+  f.conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
   return f;
 }
 

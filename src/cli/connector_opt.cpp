@@ -58,15 +58,15 @@ int connector_opt(const ConnectorOptArgs& a) {
     const collective::Tether stiff = collective::tether(C, kind);
     std::vector<std::pair<int, int>> eval;
     if (diverse) {
-      Rng rng = make_rng(cfg.run.seed, 3000, 0);  // the deployment's diverse pairs
+      Rng rng = make_rng(cfg.run.seed, io::stage_stream("deploy"), 0);  // the deployment's diverse pairs
       eval = collective::random_pairs(rng, pop, a.eval_pairs);
     } else {
       eval = collective::uniform_pairs(a.eval_pairs);
     }
     for (int r = 0; r < R; ++r) {
       const auto t0 = std::chrono::steady_clock::now();
-      const uint64_t stream = 2000 + k * R + r;  // the connectors stage's slot stream
-      Rng wr = make_rng(cfg.run.seed, stream, 1000000);
+      const uint64_t stream = io::stage_stream("connectors") + k * R + r;  // the connectors stage's slot stream
+      Rng wr = make_rng(cfg.run.seed, stream, io::kItemInitialWeights);
       collective::PlainTrainSpec spec{stiff,        ra.physics,      diverse,           C.iterations, C.batch_pairs,
                                       C.episode_steps, C.validation_pairs, cfg.run.seed, stream};
       const collective::PlainTrainResult tr =

@@ -90,8 +90,8 @@ int grad_diag(const GradDiagArgs& a) {
   const collective::Tether k = collective::tether(C, a.kind);
   DIVCOLL_THROW_UNLESS(diverse || a.pairs <= pop, "--pairs " << a.pairs << " is more than the population (" << pop << ")");
   // the stage's replicate 0 of this kind: its initial weights and its first batch
-  const uint64_t stream = 2000 + static_cast<uint64_t>(kind) * C.replicates;
-  Rng wr = make_rng(cfg.run.seed, stream, 1000000);
+  const uint64_t stream = io::stage_stream("connectors") + static_cast<uint64_t>(kind) * C.replicates;
+  Rng wr = make_rng(cfg.run.seed, stream, io::kItemInitialWeights);
   std::vector<double> theta = collective::initial_connector_params(C, k.amplitude, wr);
   std::vector<std::pair<int, int>> batch;
   if (diverse) {

@@ -199,7 +199,7 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
     if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
       a.anchors = collective::compute_anchors(a, physics);
       b.anchors = collective::compute_anchors(b, physics);
-      const std::vector<double> w = morph::init_connector_params(rng);
+      const std::vector<double> w = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
       double k = cfg.connectors.weak_stiffness;
       for (const std::string& kind : cfg.connectors.kinds)
         if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg.connectors, kind));

@@ -115,7 +115,7 @@ int scene(const SceneArgs& a) {
     agents.push_back(collective::random_agent(rng));
     if (n > 1) agents.back().anchors = collective::compute_anchors(agents.back(), physics);
   }
-  const std::vector<double> conn = morph::init_connector_params(rng);
+  const std::vector<double> conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
   sim::Scene s;
   if (a.kind == "agent") {
     s = collective::agent_scene(agents[0], a.env, physics.contact);
@@ -225,7 +225,7 @@ int demo(const DemoArgs& a) {
     morph::Agent P = collective::random_agent(rng), A = collective::random_agent(rng);
     P.anchors = collective::compute_anchors(P, physics);
     A.anchors = collective::compute_anchors(A, physics);
-    const std::vector<double> conn = morph::init_connector_params(rng);
+    const std::vector<double> conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
     std::printf("demo: two random, untrained agents joined by an untrained weak connector (they barely move; "
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");

@@ -47,6 +47,15 @@ constexpr uint64_t stage_stream(std::string_view name) {
   return 0;  // not reached for a known name (a constant expression with an unknown one fails to compile)
 }
 
+// ---- the items of a connector's random stream ---------------------------------------------------------
+// Every connector being trained (a slot of the connectors, specialists or graded stage) draws from its own stream
+// (seed, the slot's stream id above); items 0, 1, ... are its batches' random pairs, and these items the rest:
+inline constexpr uint64_t kItemInitialWeights = 1000000;    // its initial weights (connectors.init)
+inline constexpr uint64_t kItemCmaesSeed = 1000001;         // cmaes: the seed of pagmo2's generator
+inline constexpr uint64_t kItemValidationPairs = 2000000;   // keep_best: the diverse validation batch
+inline constexpr uint64_t kItemGradPerturbation = 3000000;  // + iteration: grad_samples' perturbations
+inline constexpr uint64_t kItemEsPerturbation = 4000000;    // + iteration: es's antithetic perturbations
+
 // ---- connector kinds -----------------------------------------------------------------------------
 struct ConnectorKind {
   std::string_view name;

@@ -87,7 +87,7 @@ ConnectorOptimizer::ConnectorOptimizer(const OptSettings& s, std::vector<double>
   if (s_.optimizer == "cmaes") {
     es_ = std::make_unique<Es>();
     es_->lambda = s_.es_popsize;
-    Rng rng = make_rng(seed_, stream_, 1000001);
+    Rng rng = make_rng(seed_, stream_, io::kItemCmaesSeed);
     const unsigned es_seed = static_cast<unsigned>(rng() >> 32);
     es_->cmaes = std::make_unique<Cmaes>(params_, es_->lambda, s_.es_sigma, es_seed);
   }
@@ -106,7 +106,7 @@ std::vector<Probe> ConnectorOptimizer::ask(int it) {
   if (s_.optimizer == "es") {
     // popsize/2 antithetic pairs θ ± σε, forward only
     eps_.clear();
-    Rng rng = make_rng(seed_, stream_, 4000000 + static_cast<uint64_t>(it));
+    Rng rng = make_rng(seed_, stream_, io::kItemEsPerturbation + static_cast<uint64_t>(it));
     for (int j = 0; j < s_.es_popsize / 2; ++j) {
       std::vector<double> e(params_.size());
       for (double& x : e) x = normal(rng);
@@ -122,7 +122,7 @@ std::vector<Probe> ConnectorOptimizer::ask(int it) {
   if (S <= 1) return {{params_, true}};
   // antithetic pairs θ + σε, θ − σε (and θ itself when S is odd)
   eps_.clear();
-  Rng rng = make_rng(seed_, stream_, 3000000 + static_cast<uint64_t>(it));
+  Rng rng = make_rng(seed_, stream_, io::kItemGradPerturbation + static_cast<uint64_t>(it));
   for (int j = 0; j < S / 2; ++j) {
     std::vector<double> e(params_.size());
     for (double& x : e) x = s_.grad_sigma * normal(rng);
@@ -257,7 +257,7 @@ void ConnectorOptimizer::restore(const State& st, int done) {
 std::vector<std::pair<int, int>> validation_pairs(bool diverse, int n, int batch_pairs, int population, uint64_t seed,
                                                   uint64_t stream) {
   if (diverse) {
-    Rng rng = make_rng(seed, stream, 2000000);
+    Rng rng = make_rng(seed, stream, io::kItemValidationPairs);
     return random_pairs(rng, population, n);
   }
   std::vector<std::pair<int, int>> p;

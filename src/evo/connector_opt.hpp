@@ -32,6 +32,7 @@
 #include "collective/pairs.hpp"
 #include "config/config.hpp"
 #include "evo/optim.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::collective {
 
@@ -96,8 +97,7 @@ struct Probe {
 
 class ConnectorOptimizer {
  public:
-  // `seed`, `stream`: the slot's random stream (perturbations are items 3000000 + it·samples + s, the ES seed
-  // item 1000001)
+  // `seed`, `stream`: the slot's random stream (its items: io::kItem* in src/config/pipeline.hpp)
   ConnectorOptimizer(const OptSettings& s, std::vector<double> init, int iterations, uint64_t seed, uint64_t stream);
   ~ConnectorOptimizer();
   ConnectorOptimizer(ConnectorOptimizer&&) noexcept;

@@ -27,7 +27,6 @@ namespace {
 
 using io::h5::Dims;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kHidden = 32;  // hidden units per connector spring state (SPEC §6.3)
 
 const std::array<std::string, 2>& kTypes = kAnalysisTypes;
 
@@ -591,7 +590,7 @@ void run_analysis_stage(Driver& driver) {
     const int64_t fam_done = stage.has_attribute("familiarity_envs_done") ? stage.read_int("familiarity_envs_done") : 0;
     // analysis.familiarity_on: the hidden states (SPEC §8.2) or the network inputs at the same samples
     const bool on_inputs = def.analysis.familiarity_on == "inputs";
-    const int dim = on_inputs ? sim::kConnectorInputs : kHidden;
+    const int dim = on_inputs ? sim::kConnectorInputs : sim::kHidden;
     const std::string what = on_inputs ? "/inputs" : "/states", axes = on_inputs ? "env,replicate,pair,sample,input"
                                                                                  : "env,replicate,pair,sample,neuron";
     if (fam_done < static_cast<int64_t>(novel.size()))

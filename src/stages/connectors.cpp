@@ -28,6 +28,7 @@
 #include "io/run_read.hpp"
 #include "morph/body.hpp"
 #include "stages/payload.hpp"
+#include "config/pipeline.hpp"
 
 namespace divcoll::stages {
 namespace {
@@ -88,7 +89,7 @@ class LockstepPlan : public ConnectorsPlan {
     return collective::random_pairs(rng, pop_, B_);
   }
   std::vector<double> initial_weights(int c) const {
-    Rng rng = make_rng(def_.seed, slots_[c].stream, 1000000);
+    Rng rng = make_rng(def_.seed, slots_[c].stream, io::kItemInitialWeights);
     return collective::initial_connector_params(def_.connectors, slots_[c].tether.amplitude, rng);
   }
   // one pair episode of weight vector t.weights of the round's weights_

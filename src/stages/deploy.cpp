@@ -28,7 +28,7 @@ void serialize(Ar& ar, Episode& e, unsigned) {
 // an episode's result, with the hidden states it keeps (weak connectors deployed as trained)
 struct DeployDone {
   EpisodeDone done;
-  std::vector<float> hidden;          // K × 32
+  std::vector<float> hidden;          // K × sim::kHidden
   std::vector<int32_t> hidden_index;  // K: step · 5 + connector spring
   double early_bl = 0;                // travel at deploy.early_step, BL (when it is recorded)
   std::vector<float> inputs;          // K × 11, the network inputs at hidden_index (analysis.familiarity_on = inputs)
@@ -135,10 +135,11 @@ class DeployPlan final : public Plan {
         Rng rng = make_rng(def_.seed, kDeployStage + 1, item);
         const std::vector<int64_t> picked = sorted_sample(rng, per_episode_, K_);
         d.hidden_index.assign(picked.begin(), picked.end());
-        d.hidden.assign(d.hidden_index.size() * 32, std::numeric_limits<float>::quiet_NaN());
+        constexpr int H = sim::kHidden;
+        d.hidden.assign(d.hidden_index.size() * H, std::numeric_limits<float>::quiet_NaN());
         if (o.status == sim::Status::ok)
           for (size_t k = 0; k < d.hidden_index.size(); ++k)
-            for (int q = 0; q < 32; ++q) d.hidden[k * 32 + q] = static_cast<float>(full.hidden[d.hidden_index[k] * 32 + q]);
+            for (int q = 0; q < H; ++q) d.hidden[k * H + q] = static_cast<float>(full.hidden[d.hidden_index[k] * H + q]);
         if (inputs_) {
           constexpr int I = sim::kConnectorInputs;
           d.inputs.assign(d.hidden_index.size() * I, std::numeric_limits<float>::quiet_NaN());
@@ -212,7 +213,8 @@ class DeployPlan final : public Plan {
       if (early_) out.push_back({"deploy/references/travel_bl_early", {E, RT, N}, {ei}, re});
     }
     for (size_t h = 0; h < hidden_types_.size(); ++h) {
-      out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/states", {E, R, N, K, 32}, {ei}, hid[h]});
+      out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/states", {E, R, N, K, static_cast<uint64_t>(sim::kHidden)},
+                     {ei}, hid[h]});
       out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/index", {E, R, N, K}, {ei}, hid_index[h]});
       if (inputs_)
         out.push_back({"deploy/hidden/" + types_[hidden_types_[h]] + "/inputs",

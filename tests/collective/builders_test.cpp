@@ -80,7 +80,7 @@ TEST(Anchors, PassiveFlatBodyHasFeetOnTheGroundRowAndUppersAbove) {
 TEST(Pair, AnteriorIsPlacedBehindAGapOfFiveHundredthsAndConnectorIsWellFormed) {
   const morph::Agent p = agent(1), a = agent(2);
   Rng rng = make_rng(1, 6, 0);
-  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
+  const sim::Scene s = collective::pair_scene(p, a, morph::init_connector_params(rng, morph::kConnectorInitGains[2]), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 2);
   EXPECT_EQ(s.n_connectors(), 1);
   EXPECT_NEAR(min_x_of(s, 1), max_x_of(s, 0) + 0.05, 1e-15);
@@ -123,7 +123,7 @@ TEST(Chain, HeapOrderPutsAgentZeroInFrontAndChildrenBehindTheirParent) {
   std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
   Rng rng = make_rng(2, 6, 0);
-  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng), testing::weak_connector(), "flat", testing::kCoulomb);
+  const sim::Scene s = collective::chain_scene(ptr, morph::init_connector_params(rng, morph::kConnectorInitGains[2]), testing::weak_connector(), "flat", testing::kCoulomb);
   EXPECT_EQ(s.n_agents(), 7);
   EXPECT_EQ(s.n_connectors(), 6);
   for (int k = 1; k < 7; ++k) {

@@ -349,11 +349,11 @@ TEST(BodyInit, ConnectorParamsSizeAndStatistics) {
   Rng rng(12);
   // the last layer has only 32 weights: pool 40 draws for the statistics
   std::vector<std::vector<double>> draws;
-  for (int t = 0; t < 40; ++t) draws.push_back(init_connector_params(rng));
+  for (int t = 0; t < 40; ++t) draws.push_back(init_connector_params(rng, kConnectorInitGains[2]));
   EXPECT_EQ(draws[0].size(), 1473u);
   expect_init_statistics(nn::connector_layout(), kConnectorInitGains, draws);
   Rng a(13), b(13);
-  EXPECT_EQ(init_connector_params(a), init_connector_params(b));
+  EXPECT_EQ(init_connector_params(a, kConnectorInitGains[2]), init_connector_params(b, kConnectorInitGains[2]));
 }
 
 // ---- common/rng.hpp ------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ morph::Agent make_agent(uint64_t seed) { return testing::agent_with_anchors(seed
 
 std::vector<double> make_conn(uint64_t seed) {
   Rng rng = make_rng(seed, 4, 0);
-  return morph::init_connector_params(rng);
+  return morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
 }
 
 // a scene of free masses (no springs, no agents), high above the ground

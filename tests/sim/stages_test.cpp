@@ -32,7 +32,7 @@ StageState make_state(uint64_t seed) {
   morph::Agent p = collective::random_agent(rng), a = collective::random_agent(rng);
   p.anchors = collective::compute_anchors(p, testing::kSpec, {}, 100);
   a.anchors = collective::compute_anchors(a, testing::kSpec, {}, 100);
-  Vec conn = morph::init_connector_params(rng);
+  Vec conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
   for (double& w : conn) w += 0.05 * normal(rng);  // nonzero biases: every term matters
   StageState s;
   s.scene = collective::pair_scene(p, a, conn, testing::weak_connector(), "flat", testing::kCoulomb);

@@ -25,7 +25,7 @@ struct Case {
     for (int k = 0; k < 2; ++k) {
       for (uint64_t r = 0; r < 2; ++r) {
         Rng rng = make_rng(12, k, r);
-        weights[k].push_back(morph::init_connector_params(rng));
+        weights[k].push_back(morph::init_connector_params(rng, morph::kConnectorInitGains[2]));
       }
       const std::string kind = cfg.connectors.kinds[k];
       for (const char* dep : {"uniform", "diverse"}) {

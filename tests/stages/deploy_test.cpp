@@ -21,7 +21,7 @@ struct Case {
     DeployTypes t;
     for (const std::string& kind : cfg.connectors.kinds) {
       Rng rng = make_rng(3, 3, kind.size());
-      const std::vector<std::vector<double>> reps = {morph::init_connector_params(rng)};
+      const std::vector<std::vector<double>> reps = {morph::init_connector_params(rng, morph::kConnectorInitGains[2])};
       for (const char* dep : {"uniform", "diverse"}) {
         t.names.push_back(kind + "@" + dep);
         t.weights.push_back(reps);

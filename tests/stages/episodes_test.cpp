@@ -22,7 +22,7 @@ struct Case {
   Case() {
     for (size_t k = 0; k < envs.size() * 2; ++k) {
       Rng rng = make_rng(4, 4, k);
-      weights.push_back(morph::init_connector_params(rng));
+      weights.push_back(morph::init_connector_params(rng, morph::kConnectorInitGains[2]));
     }
   }
   std::unique_ptr<EpisodesPlan> plan() const {

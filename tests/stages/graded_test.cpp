@@ -62,7 +62,7 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
                                         "graded.population=3", "connectors.replicates=1", "agents.uniqueness_k=2"});
   const std::vector<morph::Agent> agents = test::random_population(3, 9);
   Rng wr = make_rng(2, 2, 2);
-  const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr)};
+  const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr, morph::kConnectorInitGains[2])};
   const std::vector<std::pair<int, int>> pairs = {{0, 2}, {1, 0}};
   auto make = [&] { return make_graded_deploy_plan(graded_def(cfg), 0, agents, weights, pairs); };
   const SerialRun run = run_serial(*make());

@@ -21,7 +21,7 @@ struct Case {
   Case() {
     for (uint64_t k = 0; k < 2; ++k) {
       Rng rng = make_rng(6, 6, k);
-      weights.push_back(morph::init_connector_params(rng));
+      weights.push_back(morph::init_connector_params(rng, morph::kConnectorInitGains[2]));
     }
   }
   std::unique_ptr<Plan> plan() const { return make_scaling_plan(scaling_def(cfg), agents, weights); }
