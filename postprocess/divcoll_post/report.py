@@ -172,12 +172,11 @@ def scale_section(run):
     small = [r for r in rows if isinstance(r[2], (int, float)) and isinstance(r[3], (int, float)) and r[2] < r[3]]
     if small:
         verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** This page reports "
-                   f"the run file `{os.path.basename(run)}` only; it is not the paper-scale report. Claims are judged "
+                   f"the run file `{os.path.basename(run)}` only; it is not a paper-scale report. Claims are judged "
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
-                   "the count that is short. The paper-scale report, from one run file of `configs/paper.toml` with "
-                   "every stage (seed 1, 1 h 59 min on 2 cores), is in the repository at "
-                   "`postprocess/gallery/paper_seed1/report.md`; postprocess/RESULTS.md "
-                   "summarises it.")
+                   "the count that is short. The paper's claims judged over independent populations at the paper's "
+                   "per-connector scale are in the repository at `postprocess/gallery/verdicts/verdicts.md`; "
+                   "postprocess/RESULTS.md summarises every run and study.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
     out = [verdict, "", precision_line(run), "", "| count | config key | this run | paper |", "|---|---|---|---|"]

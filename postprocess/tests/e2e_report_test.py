@@ -168,8 +168,8 @@ class EndToEnd(unittest.TestCase):
         self.assertIn("Preset <code>tiny</code>", text)
         self.assertIn("Arithmetic: <code>run.precision = double</code> (the spec's).", text)
         self.assertIn("too small to judge", text)
-        self.assertIn("paper-scale report, from one run file of <code>configs/paper.toml</code>", text)
-        self.assertIn("postprocess/gallery/paper_seed1/report.md", text)
+        self.assertIn("claims judged over independent populations", text)
+        self.assertIn("postprocess/gallery/verdicts/verdicts.md", text)
         self.assertIn("<video controls", text)
         self.assertNotRegex(text, r'src="https?://')  # nothing from the network
         try:
