@@ -130,7 +130,7 @@ def agent_item(steps, epochs, g):
 
 
 def stage_phases(cfg, stage, g, where="config"):
-    """The work of one stage of a resolved config as task-farm phases (mpi/*_stage.cpp)."""
+    """The work of one stage of a resolved config as task-farm phases (src/stages/<name>.cpp)."""
     def v(section, key):
         return _get(cfg, section, key, where)
 
