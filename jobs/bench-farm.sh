@@ -2,7 +2,7 @@
 # The task farm's master measured alone (prints; it is not a test): `divcoll bench-farm` at several rank
 # counts (oversubscribed beyond this machine's cores: the synthetic items sleep, so the cores are the
 # master's), with paper-scale round sizes and a connector gradient's result size. Writes OUT/farm.csv and
-# prints a markdown table; postprocess/estimate_paper.py --farm OUT/farm.csv turns it into the efficiency
+# prints a markdown table; divcoll_post.estimate_paper --farm OUT/farm.csv turns it into the efficiency
 # of paper-scale rounds at 64 and 512 ranks.
 #   bash jobs/bench-farm.sh [OUT=out/farm] [RANKS="8 16 32"] [ITEM_MS=2] [ITEMS=4000] [extra bench-farm flags...]
 set -euo pipefail

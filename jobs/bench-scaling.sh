@@ -6,7 +6,7 @@
 # the speed-up the busy shares imply with two cores to itself (on a quiet machine it came out 0.03-0.08
 # above the measured ratio). Ranks beyond the
 # machine's cores are oversubscribed (said so in the table). Writes OUT/scaling.csv, OUT/scaling.md and
-# OUT/scaling.png (postprocess/fig_scaling.py).
+# OUT/scaling.png (divcoll_post.figures.fig_scaling).
 # The entry "1+1" in RANKS runs two independent 1-rank runs of the same config at once (no MPI between them:
 # OUT/concurrent_a.h5, OUT/concurrent_b.h5). Twice one rank's time over their mean time is what this machine
 # gives two processes side by side (shared caches, memory bandwidth, the host's scheduling): the table
@@ -47,4 +47,4 @@ for n in $RANKS; do
     | grep -E "^stage" || true
   echo "total $(echo "$(date +%s.%N) - $t0" | bc -l | cut -c1-6) s; load average after $(cut -d' ' -f1-3 /proc/loadavg)"
 done
-/usr/bin/python3 postprocess/fig_scaling.py "$OUT" --cores "$cores"
+PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig_scaling "$OUT" --cores "$cores"

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A/B of two engines in one sitting (jobs/BENCHMARKS.md): the same fixed work through two builds of
+"""A/B of two engines measured together (jobs/BENCHMARKS.md): the same fixed work through two builds of
 jobs/engine_ab_driver.cpp, run in turn (A B, then B A, ...), each timed by its thread's CPU time; prints the
 markdown table of medians and the ratio A/B pair by pair (min, median, max). A benchmark, not a test.
 

@@ -1,17 +1,20 @@
-// A/B driver for the engine (README "Engine speed-up"): the same fixed work through one build's engine,
-// timed by the thread's CPU time, so that two builds can be compared on a busy machine. Not built by CMake.
-//   today's tree (one library per layer):
-//   g++ -std=c++20 -O3 -march=native -ffp-contract=off -DHAS_AGRAD -DHAS_PHYSICS -I TREE/src -I TREE jobs/engine_ab_driver.cpp
-//       TREE/build/libdivcoll_science.a TREE/build/libdivcoll_config.a TREE/build/libdivcoll_engine.a -o ab
-//       -ltomlplusplus -lpagmo
-//   dea5a14 (one libdivcoll_core.a, no RunOptions::agent_param_grad): the same without -DHAS_AGRAD, linking
-//       TREE/build/libdivcoll_core.a -ltomlplusplus -lboost_serialization
-//   with -DHAS_FLOAT (0981201 and later) DIVCOLL_AB_FLOAT=1 in the environment runs the networks in float: a
-//   two-line script `DIVCOLL_AB_FLOAT=1 exec ./ab "$@"` is then the float side of jobs/engine_ab.py's pair.
-//   -DHAS_PHYSICS: trees whose builders take the contact law and compute_anchors the run's physics
-//   (sim::RunPhysics) explicitly; leave it out for trees with the process-wide law (before it)
+// A/B driver for the engine (jobs/BENCHMARKS.md, "Engine A/B: two builds measured together"): the same fixed work
+// through one build's engine, timed by the thread's CPU time, so that two builds can be compared on a busy machine;
+// jobs/engine_ab.py runs two such drivers in turn. Not built by CMake: it is compiled once against each tree's
+// libraries, the tree under test and the base (e.g. a `git worktree` of the base commit built with jobs/build.sh).
+//   a tree of today's layout (one library per layer), TREE its checkout with TREE/build built:
+//   g++ -std=c++20 -O3 -march=native -ffp-contract=off -DHAS_AGRAD -DHAS_PHYSICS -DHAS_FLOAT -I TREE/src -I TREE \
+//       jobs/engine_ab_driver.cpp TREE/build/libdivcoll_science.a TREE/build/libdivcoll_config.a \
+//       TREE/build/libdivcoll_engine.a -ltomlplusplus -lpagmo -o ab
+//   a base tree older than a feature leaves out its macro: -DHAS_AGRAD needs RunOptions::agent_param_grad (without
+//   it every gradient block is computed, as such a tree must), -DHAS_PHYSICS builders that take the contact law and
+//   a compute_anchors that takes the run's physics (sim::RunPhysics), -DHAS_FLOAT RunOptions::float_networks (with
+//   it, DIVCOLL_AB_FLOAT=1 in the environment runs the networks in float: a two-line script
+//   `DIVCOLL_AB_FLOAT=1 exec ./ab "$@"` is then the float side of engine_ab.py's pair). A tree from before the
+//   libraries were split by layer (e.g. dea5a14) links its one TREE/build/libdivcoll_core.a -ltomlplusplus
+//   -lboost_serialization instead.
 //   ./ab KIND BATCH STEPS GRAD AGENT_PARAM_GRAD REPS   (KIND: agent, pair, chain20) prints scene-steps per CPU
-//   second, CPU seconds and a checksum (equal checksums: the same bits). jobs/engine_ab.py runs two in turn.
+//   second, CPU seconds and a checksum (equal checksums: the same bits)
 #include <cstdio>
 #include <ctime>
 #include <cstdlib>
@@ -54,7 +57,7 @@ int main(int argc, char** argv) {
   (void)agrad;
 #endif
 #ifdef HAS_FLOAT
-  opt.float_networks = std::getenv("DIVCOLL_AB_FLOAT") != nullptr;  // the networks in float (0981201 and later)
+  opt.float_networks = std::getenv("DIVCOLL_AB_FLOAT") != nullptr;  // the networks in float
 #endif
   double s = 0;
   sim.run_batch({scenes.front()}, opt);

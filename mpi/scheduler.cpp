@@ -36,7 +36,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // "KIND T A B" line each, T on the machine's monotonic clock (s): F farm() entered (A: items), C an item
 // computed (T its end, A its start), E farm() left; the master's G (a block handed out, A its first item) and
 // R (a result taken in); a worker's S (its result sent, A its first item) and T (a block received).
-// postprocess/farm_trace.py tells where the time went. Off (not even a clock read) without the variable
+// divcoll_post.farm_trace tells where the time went. Off (not even a clock read) without the variable
 struct Trace {
   std::mutex mu;
   std::vector<std::string> lines;

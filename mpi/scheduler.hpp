@@ -9,7 +9,7 @@
 // up to 2 ms) instead of spinning in MPI, so an oversubscribed rank leaves its core to the ranks that compute;
 // with a core per rank, a rank with nothing to compute looks again at once for up to 5 ms (a worker awaiting
 // its next block, any rank in a wait between rounds), since that core has nothing else to do.
-// DIVCOLL_FARM_TRACE=PREFIX writes every rank's farm events to PREFIX.RANK (postprocess/farm_trace.py).
+// DIVCOLL_FARM_TRACE=PREFIX writes every rank's farm events to PREFIX.RANK (divcoll_post.farm_trace).
 #pragma once
 
 #include <mpi.h>

@@ -2,7 +2,7 @@
 
     divcoll export RUN.h5 --what pair --env step_up --type weak_diverse@diverse --pair 3 --out S.h5
     divcoll simulate --scene S.h5 --steps 3000 --out T.h5
-    /usr/bin/python3 postprocess/animate.py S.h5 T.h5 --out episode.gif
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.animate S.h5 T.h5 --out episode.gif
 
 Drawn: the terrain (segments of env/terrain, walls where heights jump), every spring coloured by its
 strain ℓ/L − 1 (blue shortened, red stretched; the actuation shows as strain), connector springs thicker,

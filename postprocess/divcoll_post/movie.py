@@ -1,8 +1,8 @@
 """The paper's Supplementary Movie, rendered from a run file as MP4 (H.264, Debian's ffmpeg).
 
     divcoll movie RUN.h5 [--out DIR] [--quick]
-    /usr/bin/python3 postprocess/movie.py RUN.h5 [--out DIR] [--divcoll build/divcoll] [--quick]
-    /usr/bin/python3 postprocess/movie.py --episode S1.h5 T1.h5 [S2.h5 T2.h5 ...] --out X.mp4
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.movie RUN.h5 [--out DIR] [--divcoll build/divcoll] [--quick]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.movie --episode S1.h5 T1.h5 [S2.h5 T2.h5 ...] --out X.mp4
 
 Three parts, each written as its own MP4 in DIR and joined into DIR/supplementary_movie.mp4:
 

@@ -1,4 +1,4 @@
-"""The one reader of divcoll run files: every module of divcoll_post and every script reads a run file here.
+"""The one reader of divcoll run files: every module and command line of divcoll_post reads a run file here.
 
 Two ways in, over the same checked file (root attribute format = "divcoll-run", clear errors otherwise):
 

@@ -1,9 +1,10 @@
 """The report of a run file, as a Markdown page and a self-contained HTML page: the preset and its counts
 against the paper's, provenance, the paper's claims beside this run's numbers with a verdict each, the
-summary tables, every figure the postprocess scripts can draw, and movies.
+summary tables, every figure of divcoll_post.figures, and movies.
 
     divcoll report RUN.h5 [--out DIR] [--movie]
-    /usr/bin/python3 postprocess/report.py RUN.h5 [--out DIR] [--divcoll build/divcoll] [--movie]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.report RUN.h5 [--out DIR] [--divcoll build/divcoll]
+        [--movie]
 
 Writes DIR/report.md, DIR/report.html (report_html.py: figures embedded, movies as <video controls> beside
 it; every number of the claims table and of Fig. 2A per environment, and every single episode a caption
@@ -30,7 +31,7 @@ from . import analysis as A  # noqa: E402
 from . import single_run, verdicts as V  # noqa: E402
 from .reader import NotARunFile, RunFileError, open_file  # noqa: E402
 
-# figures (postprocess/<name>, the module divcoll_post.figures.<name>), in the paper's order, with the arguments they
+# figures (the module file divcoll_post/figures/<name>), in the paper's order, with the arguments they
 # take besides the run file and --out
 FIGURES = [("fig_s1.py", []), ("fig2.py", []), ("fig3.py", []), ("fig4.py", []), ("fig_s2.py", []),
            ("fig_s3.py", []), ("contact_sheet.py", ["--divcoll"])]
@@ -136,7 +137,8 @@ def motion_section(fig_dir, out_dir, quick=False, eps=None):
               f"trajectory files of all its episodes are in `{os.path.relpath(ep_dir, out_dir)}/`. Any other "
               "episode: `divcoll export RUN.h5 --what pair --env ENV --type TYPE --pair Q --out S.h5`, "
               "`divcoll simulate --scene S.h5 --steps T --out T.h5`, "
-              "`/usr/bin/python3 postprocess/movie.py --episode S.h5 T.h5 --out episode.mp4`.", ""]
+              "`PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.movie --episode S.h5 T.h5 --out "
+              "episode.mp4`.", ""]
     return lines
 
 
@@ -170,12 +172,11 @@ def scale_section(run):
     small = [r for r in rows if isinstance(r[2], (int, float)) and isinstance(r[3], (int, float)) and r[2] < r[3]]
     if small:
         verdict = (f"**Preset `{name}`: smaller than the paper in {len(small)} of {len(rows)} counts.** This page reports "
-                   f"the run file `{os.path.basename(run)}` only; it is not the paper-scale report. Claims are judged "
+                   f"the run file `{os.path.basename(run)}` only; it is not a paper-scale report. Claims are judged "
                    "only where the run has the counts their tests need; the others read *too small to judge*, with "
-                   "the count that is short. The paper-scale report, from one run file of `configs/paper.toml` with "
-                   "every stage (seed 1, 1 h 59 min on 2 cores), is in the repository at "
-                   "`postprocess/gallery/paper_seed1/report.md`; postprocess/RESULTS.md "
-                   "summarises it.")
+                   "the count that is short. The paper's claims judged over independent populations at the paper's "
+                   "per-connector scale are in the repository at `postprocess/gallery/verdicts/verdicts.md`; "
+                   "postprocess/RESULTS.md summarises every run and study.")
     else:
         verdict = f"**Preset `{name}`: the paper's counts or more.**"
     out = [verdict, "", precision_line(run), "", "| count | config key | this run | paper |", "|---|---|---|---|"]

@@ -182,6 +182,7 @@ class Episodes:
         return ["## Episodes behind the numbers", "",
                 "Each episode a number of this page links to: `divcoll export` writes its scene file and prints the "
                 "travel the run file records for it; `divcoll simulate` on that scene reproduces the episode (travel "
-                "bit for bit; `postprocess/movie.py --episode SCENE TRAJ --out X.mp4` renders it). `divcoll` is "
-                "`build/divcoll` of the checkout; both write their files into the current folder.", ""] + \
+                "bit for bit; `PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.movie --episode SCENE TRAJ "
+                "--out X.mp4`, from the checkout's root, renders it). `divcoll` is `build/divcoll` of the checkout; "
+                "both write their files into the current folder.", ""] + \
             [f'- <a id="{a}"></a>{t}' for a, t in self.items.items()] + [""]

@@ -2,7 +2,7 @@
 (divcoll_post/verdicts.py's CLAIMS) × the study's variants, each cell the claim's effect with a 95% confidence interval
 over seeds and a verdict, and the paper's Fig. 2A per variant with error bars over seeds.
 
-    /usr/bin/python3 postprocess/robustness.py DIR [--out OUT]     (what `divcoll report DIR` runs)
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.robustness DIR [--out OUT]   (what `divcoll report DIR` runs)
 
 Writes OUT/robustness.md and OUT/figures/fig2a_<variant>.png (OUT defaults to DIR/robustness), and beside each
 run file DIR/<variant>/seed<k>.h5 its summary DIR/<variant>/seed<k>.summary.json (each claim's single-run verdict and

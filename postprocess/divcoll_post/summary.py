@@ -1,6 +1,6 @@
 """The numbers behind the paper's claims, from a divcoll run file alone, as Markdown.
 
-    /usr/bin/python3 postprocess/summary.py RUN.h5 [--out SUMMARY.md]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.summary RUN.h5 [--out SUMMARY.md]
 
 Every mean is over the episodes whose status is ok (0); episodes that ended nan or unstable are counted
 and reported, never averaged. "Novel" is the mean over the novel environments of each environment's mean

@@ -7,7 +7,7 @@ For flat ground and for the novel environments (the mean of the per-environment 
 in body lengths of the agents alone and of each deployment type `<kind>@uniform|diverse`, over the ok
 episodes (status 0), with its 95% percentile-bootstrap CI (stratified by environment) and the episodes
 left out. Everything about the layout (dimension names, environment and type names, sizes) comes from
-the file's own attributes. postprocess/fig2.py draws the same numbers.
+the file's own attributes. divcoll_post.figures.fig2 draws the same numbers.
 """
 
 import sys

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Travel against iteration per connector optimiser (issue 9.2): the validation batch's mean pair travel (BL,
+"""Travel against iteration per connector optimiser: the validation batch's mean pair travel (BL,
 1000 steps) of each optimiser's current weights, mean over replicates, one panel per connector kind, with the
 agents alone on the evaluation pairs. Reads the CSV files `divcoll connector-opt` writes.
 

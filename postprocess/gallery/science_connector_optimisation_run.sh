@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The runs behind science_connector_optimisation.md (issue 9.2): every connector optimiser on the paper-scale
+# The runs behind science_connector_optimisation.md: every connector optimiser on the paper-scale
 # agents (AGENTS.h5 = `mpirun -np 2 divcoll run configs/paper.toml 'run.stages=["agents"]' --out AGENTS.h5`),
 # at a reduced scale: 1 replicate x 16 pairs x 30 iterations x 1000 steps, validation batch 12 pairs, trained
-# pairs evaluated on 24 pairs at 1000 and 3000 steps on flat (the machine's 2 cores were shared by 8 sessions:
-# one Adam run took ~5 min). Weak uniform at stiffness 300 (where Adam loses
+# pairs evaluated on 24 pairs at 1000 and 3000 steps on flat (the machine's 2 cores were shared with other
+# jobs: one Adam run took ~5 min). Weak uniform at stiffness 300 (where Adam loses
 # travel along its own gradient), weak diverse at the default 5000 (where Adam peaks, then drifts).
 # Usage: [RUNS="u300:adam ..."] science_connector_optimisation_run.sh DIVCOLL AGENTS.h5 OUTDIR LANE
 # (LANE = 0 or 1: two processes, each every other run of the list)

@@ -1,7 +1,10 @@
-"""Paired float − double table of the precision studies, from their kept run summaries (README, float path):
+"""Paired float − double table of the precision studies, from their kept run summaries (postprocess/RESULTS.md,
+"Double against float"):
+
     /usr/bin/python3 postprocess/gallery/study_claims_reduced_precision_paired.py STUDY_DIR [STUDY_DIR ...]
+
 per seed with both variants, each type's travel on flat and in the novel environments (mean of them), float − double.
-The summaries are read and the intervals computed as on the robustness page (postprocess/robustness.py)."""
+The summaries are read and the intervals computed as on the robustness page (divcoll_post.robustness)."""
 import glob
 import os
 import sys

@@ -24,7 +24,7 @@ POST = os.path.dirname(HERE)
 REPO = os.path.dirname(POST)
 sys.path.insert(0, POST)
 
-import html_check  # noqa: E402
+from divcoll_post import html_check  # noqa: E402
 
 BIN = os.path.abspath(os.environ.get("DIVCOLL_BINARY", os.path.join(REPO, "build", "divcoll")))
 
@@ -112,7 +112,7 @@ class EndToEnd(unittest.TestCase):
         self.assertIn(f"divcoll: Python {fake} (from DIVCOLL_PYTHON)", p.stdout)
         with open(log) as fh:
             argv = fh.read()
-        self.assertIn("report.py", argv)
+        self.assertIn("-m divcoll_post.report", argv)
         self.assertIn(self.run_file, argv)
         env["DIVCOLL_PYTHON"] = os.path.join(self.dir, "no_such_python")
         p = run([BIN, "report", self.run_file], env=env, check=False)
@@ -130,8 +130,8 @@ class EndToEnd(unittest.TestCase):
         p = run([BIN, "report", not_a_run], env=env, check=False)
         self.assertIn(f"divcoll: Python {good}/python3 (the first python3 on PATH that has numpy, h5py and "
                       "matplotlib)", p.stdout)
-        self.assertEqual(p.returncode, 2)  # report.py ran under it and refused the file
-        self.assertRegex(p.stderr, r"^report: ")  # report.py itself refused the file
+        self.assertEqual(p.returncode, 2)  # divcoll_post.report ran under it and refused the file
+        self.assertRegex(p.stderr, r"^report: ")  # divcoll_post.report itself refused the file
         env["PATH"] = bare
         p = run([BIN, "report", not_a_run], env=env, check=False)
         self.assertIn(f"divcoll: Python /usr/bin/python3 (Debian's; no python3 on PATH has numpy, h5py and "
@@ -168,8 +168,8 @@ class EndToEnd(unittest.TestCase):
         self.assertIn("Preset <code>tiny</code>", text)
         self.assertIn("Arithmetic: <code>run.precision = double</code> (the spec's).", text)
         self.assertIn("too small to judge", text)
-        self.assertIn("paper-scale report, from one run file of <code>configs/paper.toml</code>", text)
-        self.assertIn("postprocess/gallery/paper_seed1/report.md", text)
+        self.assertIn("claims judged over independent populations", text)
+        self.assertIn("postprocess/gallery/verdicts/verdicts.md", text)
         self.assertIn("<video controls", text)
         self.assertNotRegex(text, r'src="https?://')  # nothing from the network
         try:

@@ -1,4 +1,4 @@
-"""Tests of postprocess/estimate_paper.py on synthetic scaling-benchmark run files (run_np<N>.h5) whose busy
+"""Tests of divcoll_post.estimate_paper on synthetic scaling-benchmark run files (run_np<N>.h5) whose busy
 and wall times are set from known costs per work unit.
 
     cd <repo> && /usr/bin/python3 -m unittest postprocess/tests/test_estimate.py -v
@@ -20,7 +20,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 POST = os.path.dirname(HERE)
 sys.path.insert(0, POST)
 
-import estimate_paper as E  # noqa: E402
+from divcoll_post import estimate_paper as E  # noqa: E402
 
 # a small quick config; every key left out takes configs/paper.toml's value
 QUICK = """
@@ -299,8 +299,8 @@ class CliTest(Base):
         self.assertEqual(rc, 0, err)
         self.assertNotIn("| analysis |", out)
         # and a real process exit status
-        p = subprocess.run([sys.executable, os.path.join(POST, "estimate_paper.py"), empty],
-                           capture_output=True, text=True, timeout=60)
+        p = subprocess.run([sys.executable, "-m", "divcoll_post.estimate_paper", empty], capture_output=True,
+                           text=True, timeout=60, env=dict(os.environ, PYTHONPATH=POST))
         self.assertEqual(p.returncode, 2)
         self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
 

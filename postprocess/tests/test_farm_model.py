@@ -1,5 +1,5 @@
-"""Tests of postprocess/farm_model.py (the efficiency of task-farm rounds from the master's measured cost) and of
-estimate_paper.py --farm, on synthetic bench-farm CSVs.
+"""Tests of divcoll_post.farm_model (the efficiency of task-farm rounds from the master's measured cost) and of
+divcoll_post.estimate_paper --farm, on synthetic bench-farm CSVs.
 
     cd <repo> && /usr/bin/python3 -m unittest postprocess/tests/test_farm_model.py -v
 """
@@ -13,8 +13,8 @@ import unittest
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import estimate_paper as E  # noqa: E402
-import farm_model as F  # noqa: E402
+from divcoll_post import estimate_paper as E  # noqa: E402
+from divcoll_post import farm_model as F  # noqa: E402
 
 HEAD = ("ranks,computing,items,item_ms,result_bytes,block,depth,fold,round_s,ideal_s,efficiency,"
         "master_cpu_us_per_item,task_us_per_msg,task_us_per_item,result_us_per_msg,result_us_per_item,"

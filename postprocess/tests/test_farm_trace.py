@@ -1,4 +1,4 @@
-"""Tests of postprocess/farm_trace.py (where a multi-rank run's time goes, from the farm's trace) on synthetic
+"""Tests of divcoll_post.farm_trace (where a multi-rank run's time goes, from the farm's trace) on synthetic
 traces whose every share is known.
 
     cd <repo> && /usr/bin/python3 -m unittest postprocess/tests/test_farm_trace.py -v
@@ -13,7 +13,7 @@ import unittest
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-import farm_trace as T  # noqa: E402
+from divcoll_post import farm_trace as T  # noqa: E402
 
 
 def write(folder, rank, lines):

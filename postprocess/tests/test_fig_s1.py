@@ -1,4 +1,4 @@
-"""Tests of the run-file reader and fig_s1.py on a synthetic run file.
+"""Tests of the run-file reader and divcoll_post.figures.fig_s1 on a synthetic run file.
 
     cd <repo> && /usr/bin/python3 -m unittest discover -s postprocess/tests -v
 """
@@ -21,7 +21,6 @@ sys.path.insert(0, POST)
 from divcoll_post import runfile  # noqa: E402
 from divcoll_post.figures import fig_s1  # noqa: E402
 
-FIG = os.path.join(POST, "fig_s1.py")
 ROWS, COLS = 4, 7
 M = 12
 
@@ -146,8 +145,8 @@ class FigS1Test(unittest.TestCase):
 
     def fig(self, path, out=None):
         out = out or os.path.join(self.tmp, "figs")
-        return subprocess.run([sys.executable, FIG, path, "--out", out],
-                              capture_output=True, text=True, timeout=300)
+        return subprocess.run([sys.executable, "-m", "divcoll_post.figures.fig_s1", path, "--out", out],
+                              capture_output=True, text=True, timeout=300, env=dict(os.environ, PYTHONPATH=POST))
 
     # --- reader -----------------------------------------------------------------------------------
     def test_reader_final_shapes(self):

@@ -1,4 +1,4 @@
-"""Tests of postprocess/fig_scaling.py (the table of jobs/bench-scaling.sh) on synthetic run files whose stage
+"""Tests of divcoll_post.figures.fig_scaling (the table of jobs/bench-scaling.sh) on synthetic run files whose stage
 timing attributes are set by hand.
 
     cd <repo> && /usr/bin/python3 -m unittest postprocess/tests/test_fig_scaling.py -v

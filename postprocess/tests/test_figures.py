@@ -1,4 +1,4 @@
-"""Tests of divcoll_post/results.py and the figure scripts fig2.py, fig4.py, fig_s2.py, fig_s3.py on
+"""Tests of divcoll_post/results.py and the figures fig2, fig4, fig_s2, fig_s3 (divcoll_post.figures) on
 synthetic run files whose numbers are set by hand.
 
     cd <repo> && /usr/bin/python3 -m unittest postprocess/tests/test_figures.py -v
@@ -327,8 +327,8 @@ class ScriptsTest(Base):
             self.assertIn(msg, err, mod.__name__)
         self.assertFalse(os.path.exists(out))  # nothing drawn
         # and a real process exit status, with the message on stderr
-        p = subprocess.run([sys.executable, os.path.join(POST, "fig4.py"), only_deploy, "--out", out],
-                           capture_output=True, text=True, timeout=60)
+        p = subprocess.run([sys.executable, "-m", "divcoll_post.figures.fig4", only_deploy, "--out", out],
+                           capture_output=True, text=True, timeout=60, env=dict(os.environ, PYTHONPATH=POST))
         self.assertEqual(p.returncode, 2)
         self.assertIn("fig4: ", p.stderr)
         self.assertIn("run file has no scaling stage (run the scaling stage first)", p.stderr)

@@ -47,13 +47,13 @@ int export_scene(const ExportArgs& a);
 struct DemoArgs {
   std::string out = "out/demo", env = "step_up";
   std::string run;     // a run file: its trained agents and weak diverse-trained connector (else random ones)
-  bool movie = false;  // also render the two episodes as MP4 (postprocess/movie.py --episode)
+  bool movie = false;  // also render the two episodes as MP4 (divcoll_post.movie --episode)
   uint64_t seed = 1;
   int steps = 1000;
 };
 int demo(const DemoArgs& a);
 
-// divcoll report RUN.h5 --out DIR: the report pages of a run file (postprocess/report.py under find_python())
+// divcoll report RUN.h5 --out DIR: the report pages of a run file (divcoll_post.report under find_python())
 struct ReportArgs {
   std::string run, out = "out/report";
   bool movie = false;  // also render the supplementary movie into the page
@@ -61,23 +61,24 @@ struct ReportArgs {
 };
 int report(const ReportArgs& a);  // replaces the process with Python; returns only by throwing
 
-// divcoll movie RUN.h5 --out DIR: the paper's Supplementary Movie as MP4 (postprocess/movie.py, ffmpeg)
+// divcoll movie RUN.h5 --out DIR: the paper's Supplementary Movie as MP4 (divcoll_post.movie, ffmpeg)
 struct MovieArgs {
   std::string run, out = "out/movie";
   bool quick = false;  // fewer frames and environments (tests)
 };
 int movie(const MovieArgs& a);  // replaces the process with Python; returns only by throwing
 
-// the Python the postprocess scripts run under: $DIVCOLL_PYTHON, else the first python3 on PATH that imports
-// numpy, h5py and matplotlib, else /usr/bin/python3; `why` says which rule chose it
+// the Python the postprocessing (the divcoll_post package) runs under: $DIVCOLL_PYTHON, else the first python3 on
+// PATH that imports numpy, h5py and matplotlib, else /usr/bin/python3; `why` says which rule chose it
 struct PythonChoice {
   std::string path, why;
 };
 PythonChoice find_python();
-std::string find_postprocess_script(const std::string& name);
-// runs postprocess/<script> with args (and --divcoll <this binary>) under find_python(), printing which
-// Python; waits and returns its exit status (-1 when it could not start)
-int run_python(const std::string& script, const std::vector<std::string>& args);
+// the postprocess/ folder that holds the divcoll_post package
+std::string find_postprocess_dir();
+// runs `python -m <module>` of divcoll_post (e.g. "divcoll_post.movie") with args (and --divcoll <this binary>)
+// under find_python(), printing which Python; waits and returns its exit status (-1 when it could not start)
+int run_python(const std::string& module, const std::vector<std::string>& args);
 
 // divcoll bench: steps per second per core and speed against error
 struct BenchArgs {

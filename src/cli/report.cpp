@@ -1,4 +1,4 @@
-// divcoll report RUN.h5 and divcoll movie RUN.h5: run postprocess/report.py and postprocess/movie.py under a
+// divcoll report RUN.h5 and divcoll movie RUN.h5: run divcoll_post.report and divcoll_post.movie under a
 // Python that has numpy, h5py and matplotlib: $DIVCOLL_PYTHON, else the first python3 on PATH that imports
 // them, else /usr/bin/python3 (Debian's, which jobs/install-deps.sh equips); the one used is printed.
 #include <fcntl.h>
@@ -83,28 +83,34 @@ PythonChoice find_python() {
   return {deb, why};
 }
 
-// where a postprocess script is: $DIVCOLL_POSTPROCESS, else next to the build folder of this binary, else the
-// source folder this binary was configured from
-std::string find_postprocess_script(const std::string& name) {
+// the folder that holds the divcoll_post package (postprocess/ of the checkout): $DIVCOLL_POSTPROCESS, else a
+// postprocess/ next to the build folder of this binary or above it, else the source folder this binary was
+// configured from
+std::string find_postprocess_dir() {
   std::vector<fs::path> candidates;
-  if (const char* env = std::getenv("DIVCOLL_POSTPROCESS")) candidates.emplace_back(fs::path(env) / name);
+  if (const char* env = std::getenv("DIVCOLL_POSTPROCESS")) candidates.emplace_back(env);
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (!ec)
     for (fs::path p = self.parent_path(); !p.empty() && p != p.root_path(); p = p.parent_path())
-      candidates.push_back(p / "postprocess" / name);
-  candidates.emplace_back(fs::path(DIVCOLL_SOURCE_DIR) / "postprocess" / name);
+      candidates.push_back(p / "postprocess");
+  candidates.emplace_back(fs::path(DIVCOLL_SOURCE_DIR) / "postprocess");
   for (const fs::path& c : candidates)
-    if (fs::is_regular_file(c, ec)) return c.string();
-  throw InputError(msg() << "cannot find postprocess/" << name << " (looked next to this binary and in "
+    if (fs::is_regular_file(c / "divcoll_post" / "__init__.py", ec)) return c.string();
+  throw InputError(msg() << "cannot find postprocess/divcoll_post (looked next to this binary and in "
                          << DIVCOLL_SOURCE_DIR << "); set DIVCOLL_POSTPROCESS to the postprocess folder");
 }
 
-std::vector<std::string> python_command(const std::string& script, const std::vector<std::string>& args,
+// `python -m module args --divcoll <this binary>`, with the postprocess folder first on PYTHONPATH (set in this
+// process, so that the Python it starts inherits it)
+std::vector<std::string> python_command(const std::string& module, const std::vector<std::string>& args,
                                         bool announce) {
   const PythonChoice py = find_python();
   if (announce) std::printf("divcoll: Python %s (%s)\n", py.path.c_str(), py.why.c_str());
-  std::vector<std::string> cmd = {py.path, find_postprocess_script(script)};
+  std::string path = find_postprocess_dir();
+  if (const char* old = std::getenv("PYTHONPATH"); old && *old) path += std::string(":") + old;
+  ::setenv("PYTHONPATH", path.c_str(), /*overwrite=*/1);
+  std::vector<std::string> cmd = {py.path, "-m", module};
   cmd.insert(cmd.end(), args.begin(), args.end());
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -112,18 +118,18 @@ std::vector<std::string> python_command(const std::string& script, const std::ve
   return cmd;
 }
 
-int exec_python(const std::string& script, const std::vector<std::string>& args) {
-  std::vector<std::string> cmd = python_command(script, args, true);
+int exec_python(const std::string& module, const std::vector<std::string>& args) {
+  std::vector<std::string> cmd = python_command(module, args, true);
   std::vector<char*> argv;
   for (auto& s : cmd) argv.push_back(s.data());
   argv.push_back(nullptr);
   std::fflush(stdout);
   ::execv(argv[0], argv.data());
-  throw InputError(msg() << "could not start " << cmd[0] << " " << cmd[1]);
+  throw InputError(msg() << "could not start " << cmd[0] << " -m " << cmd[2]);
 }
 
-int run_python(const std::string& script, const std::vector<std::string>& args) {
-  return spawn(python_command(script, args, true), /*quiet=*/false);
+int run_python(const std::string& module, const std::vector<std::string>& args) {
+  return spawn(python_command(module, args, true), /*quiet=*/false);
 }
 
 int report(const ReportArgs& a) {
@@ -132,20 +138,20 @@ int report(const ReportArgs& a) {
     const std::string out = a.out == ReportArgs{}.out ? (fs::path(a.run) / "robustness").string() : a.out;
     std::vector<std::string> args = {a.run, "--out", out};
     if (!a.keep.empty()) args.insert(args.end(), {"--keep", a.keep});
-    return exec_python("robustness.py", args);
+    return exec_python("divcoll_post.robustness", args);
   }
   if (!a.keep.empty())
     throw InputError(msg() << "report --keep " << a.keep << ": --keep copies a study folder, and " << a.run
                            << " is a run file");
   std::vector<std::string> args = {a.run, "--out", a.out};
   if (a.movie) args.push_back("--movie");
-  return exec_python("report.py", args);
+  return exec_python("divcoll_post.report", args);
 }
 
 int movie(const MovieArgs& a) {
   std::vector<std::string> args = {a.run, "--out", a.out};
   if (a.quick) args.push_back("--quick");
-  return exec_python("movie.py", args);
+  return exec_python("divcoll_post.movie", args);
 }
 
 }  // namespace divcoll::cli

@@ -250,8 +250,8 @@ int demo(const DemoArgs& a) {
     for (const auto& [sc, tr] : episodes) args.insert(args.end(), {sc, tr});
     const std::string mp4 = (fs::path(a.out) / "demo.mp4").string();
     args.insert(args.end(), {"--out", mp4});
-    const int rc = run_python("movie.py", args);
-    DIVCOLL_THROW_UNLESS(rc == 0, "rendering " << mp4 << " failed (postprocess/movie.py exit " << rc << ")");
+    const int rc = run_python("divcoll_post.movie", args);
+    DIVCOLL_THROW_UNLESS(rc == 0, "rendering " << mp4 << " failed (divcoll_post.movie exit " << rc << ")");
   } else {
     std::printf("watch them: build/divcoll demo%s%s --out %s --movie (MP4 with ffmpeg)\n", a.run.empty() ? "" : " --run ",
                 a.run.c_str(), a.out.c_str());

@@ -282,7 +282,7 @@ void write_manifest(const std::string& dir, const toml::table& t) {
   fs::rename(tmp, p);
 }
 
-// robustness.py's summary of a run file: DIR/<variant>/seed<k>.h5 -> DIR/<variant>/seed<k>.summary.json
+// divcoll_post.robustness's summary of a run file: DIR/<variant>/seed<k>.h5 -> DIR/<variant>/seed<k>.summary.json
 std::filesystem::path summary_path(const std::filesystem::path& run) {
   std::filesystem::path p = run;
   return p.replace_extension(".summary.json");
@@ -469,7 +469,7 @@ Prepared prepare(const StudyArgs& args, bool continuing, bool talk) {
                                                       << "changed study");
       }
       p.st[j] = o.st;
-      // a run marked complete whose file is gone is run again, unless its summary is there (robustness.py
+      // a run marked complete whose file is gone is run again, unless its summary is there (divcoll_post.robustness
       // writes DIR/<variant>/seed<k>.summary.json beside each run file; a folder kept as its manifest and
       // summaries gathers seeds run elsewhere)
       if (p.st[j].status == "complete" && !fs::exists(file) && !fs::exists(summary_path(file)))

@@ -13,8 +13,8 @@
 
 namespace divcoll::collective {
 
-// the agent type is morphology's (morph/agent.hpp); these names stay here for the stage plans under mpi/ that
-// still spell them collective:: (to be dropped once those files have moved to src/stages)
+// the agent type is morphology's (morph/agent.hpp); the code in namespace collective (collective/, evo/connector_opt)
+// names it, its anchors and its body length through these
 using morph::Agent;
 using morph::Anchors;
 using morph::body_length;

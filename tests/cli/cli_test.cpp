@@ -96,7 +96,7 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
       {"run " + testing::source_dir() + "/configs/tiny.toml deploy.environments=flat,moon --out " + path("r.h5"),
        "moon"},
       {"evolve " + path("text.h5") + " --out " + path("r.h5"), "text.h5"},
-      // report: through postprocess/report.py under /usr/bin/python3
+      // report: through divcoll_post.report under /usr/bin/python3
       {"report " + good + " --out " + path("rep"), "is not a divcoll run file"},
       {"report " + path("text.h5") + " --out " + path("rep"), "cannot read"},
       {"report " + path("missing.h5"), "missing.h5"},

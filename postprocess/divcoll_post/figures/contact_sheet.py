@@ -1,11 +1,12 @@
 """A contact sheet of one uniform and one diverse pair in every environment of a run file.
 
-    /usr/bin/python3 postprocess/contact_sheet.py RUN.h5 [--divcoll build/divcoll] [--out DIR] [--gifs]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.contact_sheet RUN.h5 [--divcoll build/divcoll]
+        [--out DIR] [--gifs]
 
 For every deployment environment it exports (`divcoll export`) pair --pair of replicate --replicate of
 weak_uniform@uniform and of weak_diverse@diverse, simulates it (`divcoll simulate`) for the run's episode
 length, checks that the simulated travel equals the run file's, and draws its last step with the path of
-its centre of mass. With --gifs it also writes one animation per episode (postprocess/animate.py). Writes
+its centre of mass. With --gifs it also writes one animation per episode (divcoll_post.animate). Writes
 DIR/contact_sheet.png and DIR/episodes/*.h5 (scene and trajectory files, to look at exactly these
 episodes again).
 """

@@ -1,6 +1,7 @@
 """Fig. 2: internal diversity and loose coupling confer resilience (travel of the eight collective types).
 
-    /usr/bin/python3 postprocess/fig2.py RUN.h5 [--out DIR] [--dpi 150] [--strong] [--boot 1000] [--boot-seed 0]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig2 RUN.h5 [--out DIR] [--dpi 150] [--strong]
+        [--boot 1000] [--boot-seed 0]
 
 Reads /deploy of a divcoll run file and writes DIR/fig2_resilience.png and .pdf (DIR defaults to
 out/figures). Every number is a mean travel in body lengths (BL) over the ok episodes (status 0);

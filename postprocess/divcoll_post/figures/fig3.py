@@ -1,7 +1,7 @@
 """Fig. 3: internal adversity (DTW, a) and external adversity (familiarity of the connector's states, b-c).
 
-    /usr/bin/python3 postprocess/fig3.py RUN.h5 [--out DIR] [--dpi 150] [--env wind] [--replicate 0]
-                                              [--boot 1000] [--boot-seed 0]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig3 RUN.h5 [--out DIR] [--dpi 150] [--env wind]
+        [--replicate 0] [--boot 1000] [--boot-seed 0]
 
 Reads /analysis of a divcoll run file (src/stages/analysis.hpp) and writes DIR/fig3_adversity_familiarity.png
 and .pdf (DIR defaults to out/figures). Two connector types, both weak and deployed as trained: uniform-trained

@@ -1,7 +1,7 @@
 """Fig. 4: travel of uniform and diverse collectives against collective size, per environment.
 
-    /usr/bin/python3 postprocess/fig4.py RUN.h5 [--out DIR] [--dpi 150] [--no-pair] [--no-agents]
-                                              [--boot 1000] [--boot-seed 0]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig4 RUN.h5 [--out DIR] [--dpi 150] [--no-pair]
+        [--no-agents] [--boot 1000] [--boot-seed 0]
 
 Reads /scaling (travel_bl, status: E × S × 2 × R × draws; sizes) and, for the reference points,
 /deploy; writes DIR/fig4_scaling.png and .pdf (DIR defaults to out/figures).

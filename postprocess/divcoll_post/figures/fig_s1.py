@@ -1,6 +1,6 @@
 """Fig. S1: the morphologies of the final evolved population, one panel per agent.
 
-    /usr/bin/python3 postprocess/fig_s1.py RUN.h5 [--out DIR] [--dpi 150]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig_s1 RUN.h5 [--out DIR] [--dpi 150]
 
 Reads /agents/final of a divcoll run file (rest positions, springs, amplitudes, fitness, status) and
 writes DIR/fig_s1_morphologies.png and .pdf. Panels are sorted by fitness, best first, and titled

@@ -1,6 +1,6 @@
 """Fig. S2: generalist connectors against environment specialists, per novel environment.
 
-    /usr/bin/python3 postprocess/fig_s2.py RUN.h5 [--out DIR] [--dpi 150]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig_s2 RUN.h5 [--out DIR] [--dpi 150]
 
 Reads /deploy and /specialists of a divcoll run file and writes DIR/fig_s2_specialists.png and .pdf
 (DIR defaults to out/figures). For every novel environment:

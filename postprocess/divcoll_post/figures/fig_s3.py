@@ -1,6 +1,7 @@
 """Fig. S3: graded diversity among agents — agents alone vs. pairs joined by weak diverse-trained connectors.
 
-    /usr/bin/python3 postprocess/fig_s3.py RUN.h5 [--out DIR] [--dpi 150] [--boot 1000] [--boot-seed 0]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig_s3 RUN.h5 [--out DIR] [--dpi 150]
+        [--boot 1000] [--boot-seed 0]
 
 Reads /graded (the two graded populations, SPEC §7.5) and /deploy (the main population) of a divcoll
 run file and writes DIR/fig_s3_graded.png and .pdf (DIR defaults to out/figures).

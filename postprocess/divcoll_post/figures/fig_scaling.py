@@ -10,7 +10,7 @@ OUT/run_np<N>.h5. With OUT/concurrent_a.h5 and OUT/concurrent_b.h5 (bench-scalin
 1-rank runs at once) and a 1-rank run, a column gives the machine's cap for 2 ranks per stage, 2 × t(1 rank) /
 mean t(each of the two at once), and the 2-rank cell says what share of that cap it reached.
 
-    /usr/bin/python3 postprocess/fig_scaling.py OUT [--cores C]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.fig_scaling OUT [--cores C]
 
 Writes OUT/scaling.csv, OUT/scaling.md and OUT/scaling.png.
 """

@@ -1,6 +1,6 @@
 """Table S1: "familiarity" of the weak connectors' hidden states in the novel environments, as Markdown.
 
-    /usr/bin/python3 postprocess/table_s1.py RUN.h5 [--out DIR]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.figures.table_s1 RUN.h5 [--out DIR]
 
 Reads /analysis/familiarity of a divcoll run file (src/stages/analysis.hpp) and writes DIR/table_s1.md (DIR
 defaults to out/figures); prints its path. One row per novel environment. For each connector replicate and

@@ -1,9 +1,8 @@
-#!/usr/bin/python3
 """Efficiency of the paper's task-farm rounds at many ranks, from the master's cost measured by
 jobs/bench-farm.sh (`divcoll bench-farm` at 8, 16, 32 ranks).
 
-    /usr/bin/python3 postprocess/farm_model.py OUT/farm.csv [--paper configs/paper.toml] [--ranks 64 512]
-                                               [--item-ms 6.25] [--pairs-per-item 1] [--cost fit|top]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.farm_model OUT/farm.csv [--paper configs/paper.toml]
+        [--ranks 64 512] [--item-ms 6.25] [--pairs-per-item 1] [--cost fit|top]
 
 One round of n items of t seconds on p ranks: the master only coordinates (W = p - 1 workers; with p <= 2
 it computes too, W = p). It sends every worker its first block one message after another, then answers
@@ -37,7 +36,7 @@ import sys
 import tomllib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-PAPER = os.path.join(os.path.dirname(HERE), "configs", "paper.toml")
+PAPER = os.path.join(os.path.dirname(os.path.dirname(HERE)), "configs", "paper.toml")  # the repository's
 
 
 class InputError(Exception):

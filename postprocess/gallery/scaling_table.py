@@ -1,13 +1,13 @@
 #!/usr/bin/python3
-"""One table over several sittings of `bash jobs/bench-scaling.sh CONFIG OUT "1 1+1 2"` (or "1 2"): per stage and
-sitting, the 2-rank wall ratio, the cap (two 1-rank runs at once; only in sittings that ran `1+1`) and the share of
-the cap reached, and where the runs have the CPU counters the speed-up their busy and on-core shares imply
-(postprocess/fig_scaling.py's `implied`).
+"""One table over several measurements of `bash jobs/bench-scaling.sh CONFIG OUT "1 1+1 2"` (or "1 2"): per stage
+and measurement, the 2-rank wall ratio, the cap (two 1-rank runs at once; only in measurements that ran `1+1`) and
+the share of the cap reached, and where the runs have the CPU counters the speed-up their busy and on-core shares
+imply (divcoll_post.figures.fig_scaling's `implied`).
 
-    /usr/bin/python3 postprocess/gallery/scaling_sittings_table.py [--factors] OUT1 OUT2 ...
+    /usr/bin/python3 postprocess/gallery/scaling_table.py [--factors] OUT1 OUT2 ...
 
---factors: instead, the two factors of `implied` per stage and sitting: the busy share at 2 ranks (and 2 × busy₂ /
-busy₁, the farm's idle time alone) and the share of the computing threads' busy time they were on a core.
+--factors: instead, the two factors of `implied` per stage and measurement: the busy share at 2 ranks (and
+2 × busy₂ / busy₁, the farm's idle time alone) and the share of the computing threads' busy time they were on a core.
 """
 import math
 import os
@@ -49,7 +49,7 @@ def main(dirs):
         if not conc:  # no 1+1 run: the stages both rank counts ran, no cap
             conc = {s: None for s in F.STAGES if (1, s) in rows and (2, s) in rows}
         if not conc or not all((n, s) in rows for n in (1, 2) for s in conc):
-            print(f"scaling_sittings_table: {d} lacks a 1-rank or a 2-rank run", file=sys.stderr)
+            print(f"scaling_table: {d} lacks a 1-rank or a 2-rank run", file=sys.stderr)
             return 2
         data.append((rows, conc))
     for st in F.STAGES + ["total"]:

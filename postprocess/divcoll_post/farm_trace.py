@@ -1,8 +1,7 @@
-#!/usr/bin/python3
 """Where a multi-rank run's time goes, from the task farm's trace (mpi/scheduler.hpp, DIVCOLL_FARM_TRACE).
 
     DIVCOLL_FARM_TRACE=/tmp/tr mpirun -x DIVCOLL_FARM_TRACE -np 2 build/divcoll run CONFIG --out RUN.h5
-    /usr/bin/python3 postprocess/farm_trace.py /tmp/tr [--ranks 2]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.farm_trace /tmp/tr [--ranks 2]
 
 Every rank appends its events to PREFIX.RANK, one per line, "KIND T A B" with T on the machine's monotonic
 clock (seconds; the ranks of one machine share it): F farm() entered (A = items of the round), C an item

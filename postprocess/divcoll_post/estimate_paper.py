@@ -1,8 +1,7 @@
-#!/usr/bin/python3
 """Estimate of the paper-scale wall time per stage from the measured throughput of a scaling benchmark.
 
-    /usr/bin/python3 postprocess/estimate_paper.py OUT [--paper configs/paper.toml] [--cores 2 64 512]
-                                                       [--measured PAPER_RUN.h5] [--farm FARM.csv]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.estimate_paper OUT [--paper configs/paper.toml]
+        [--cores 2 64 512] [--measured PAPER_RUN.h5] [--farm FARM.csv]
 
 OUT holds run_np<N>.h5 written by jobs/bench-scaling.sh (the quick preset at N ranks). Per stage, the cost of
 one work unit (core-seconds) is the busy time summed over ranks divided by the work units of that run (the run
@@ -14,7 +13,7 @@ modelled compute time. The paper config's stages are then modelled as task-farm 
 
 so a stage cannot use more ranks than the items of one round. With --farm (jobs/bench-farm.sh's CSV) the
 rounds beyond 2 cores also pay for the master: p - 1 workers, the first blocks sent one after another, and
-no faster than the master serves items (postprocess/farm_model.py). Writes OUT/estimate.md and prints it. With
+no faster than the master serves items (divcoll_post.farm_model). Writes OUT/estimate.md and prints it. With
 --measured, prints (and appends) the estimate against the wall time of each complete stage of a paper-scale
 run file at its rank count. Exit status 2 on bad input (one line on stderr).
 
@@ -36,9 +35,12 @@ from dataclasses import dataclass, field
 
 import h5py
 
-from divcoll_post.reader import STAGES  # noqa: E402
+from . import farm_model
+from .reader import STAGES, RunFileError, open_file, text as _s
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULTS = os.path.join(os.path.dirname(HERE), "configs", "paper.toml")  # every key's built-in default
+# every key's built-in default: configs/paper.toml of the repository this package lives in
+DEFAULTS = os.path.join(os.path.dirname(os.path.dirname(HERE)), "configs", "paper.toml")
 DEFAULT_GRAD_FACTOR = 2.6  # jobs/BENCHMARKS.md: a pair's forward steps/s over its forward+backward steps/s
 UNIT = "pair-step eq."
 
@@ -128,7 +130,7 @@ def agent_item(steps, epochs, g):
 
 
 def stage_phases(cfg, stage, g, where="config"):
-    """The work of one stage of a resolved config as task-farm phases (mpi/*_stage.cpp)."""
+    """The work of one stage of a resolved config as task-farm phases (src/stages/<name>.cpp)."""
     def v(section, key):
         return _get(cfg, section, key, where)
 
@@ -178,7 +180,7 @@ def stage_phases(cfg, stage, g, where="config"):
 
 @dataclass
 class FarmCost:
-    """The task farm's master measured by jobs/bench-farm.sh (postprocess/farm_model.py): µs of its CPU per
+    """The task farm's master measured by jobs/bench-farm.sh (divcoll_post.farm_model): µs of its CPU per
     item, µs per task message."""
     c_serve: float
     c_task: float
@@ -186,7 +188,6 @@ class FarmCost:
 
 
 def read_farm(path):
-    import farm_model
     try:
         top, rows = farm_model.read_costs(path)
     except farm_model.InputError as e:
@@ -199,7 +200,7 @@ def read_farm(path):
 def round_time(items, p, cost, farm=None):
     """One round of a dynamic task farm on p ranks: all of them compute (farm None), or, with the master's
     measured cost, p - 1 workers beyond 2 ranks, the first blocks sent one after another, and never faster
-    than the master can serve the items (postprocess/farm_model.py)."""
+    than the master can serve the items (divcoll_post.farm_model)."""
     n = sum(c for c, _ in items)
     if n == 0:
         return 0.0
@@ -239,9 +240,6 @@ class StageCost:
 
     def cost(self, kind):
         return self.c_fit if kind == "fit" else self.c_sim
-
-
-from divcoll_post.reader import RunFileError, open_file, text as _s  # noqa: E402
 
 
 def read_run(path, defaults):

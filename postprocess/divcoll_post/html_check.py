@@ -1,8 +1,8 @@
-#!/usr/bin/python3
 """Open an HTML page in headless Chromium and check it: every image decoded, every video's metadata loaded,
 no console error, no uncaught exception, no failed request. Optionally save a screenshot.
 
-    /usr/bin/python3 postprocess/html_check.py PAGE.html [--screenshot OUT.png] [--width 1280] [--height 2000]
+    PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.html_check PAGE.html [--screenshot OUT.png]
+        [--width 1280] [--height 2000]
 
 Talks to Chromium over the DevTools protocol on a pipe (--remote-debugging-pipe: JSON messages, each ended by
 a NUL byte, written to its fd 3 and read from its fd 4), Python's standard library only. Exit status: 0 the page
