@@ -15,6 +15,7 @@
 #include "io/h5.hpp"
 #include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
+#include "stages/schedule.hpp"
 
 namespace divcoll {
 namespace {
@@ -177,13 +178,13 @@ class IndependentPlan final : public mpi::Plan {
 };
 
 TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) {
-  const int R = 3 * static_cast<int>(mpi::kTogetherItemsPerRank) + 5;  // one item per round: farms of several
+  const int R = 3 * static_cast<int>(stages::kTogetherItemsPerRank) + 5;  // one item per round: farms of several
   int commits = 0;
   IndependentPlan plan(R);
   const std::string path = drive_into("ind.h5", plan, 1, [&] { ++commits; });
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const int per_farm = static_cast<int>(mpi::kTogetherItemsPerRank) * size;
+  const int per_farm = static_cast<int>(stages::kTogetherItemsPerRank) * size;
   EXPECT_EQ(commits, (R + per_farm - 1) / per_farm) << "one commit per farm of kTogetherItemsPerRank rounds per rank";
   if (rank_of() == 0) {
     std::vector<int> in_order(R);
