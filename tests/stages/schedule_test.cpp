@@ -1,5 +1,6 @@
 // a plan's schedule (stages/schedule.hpp) on a toy plan: passes, independent rounds farmed together, commit
-// points, the closing round, a resume, the other processes following the master
+// points, the closing round, a resume, the other processes following the master; and the driver's calls and the
+// serial farm's are the same for every shape of plan (each stage's plans: tests/stages/<name>_test.cpp)
 #include "stages/schedule.hpp"
 
 #include <gtest/gtest.h>
@@ -10,63 +11,13 @@
 #include <vector>
 
 #include "stages/payload.hpp"
+#include "stages/stage_testing.hpp"
+#include "stages/toy_plan.hpp"
 
 namespace divcoll::stages {
 namespace {
 
-// `rounds` rounds of `passes` passes; step s has items[s % items.size()] items computing 1000 s + k; round inputs
-// "in s" unless independent; costs k + 1 when `costed`. It logs take_input, reduce and end_round
-class Toy final : public Plan {
- public:
-  struct Shape {
-    int rounds = 4, passes = 1, commit_every = 0;
-    bool independent = false, closing = false, costed = false;
-    std::vector<int> items = {3};
-  };
-  explicit Toy(Shape s) : s_(std::move(s)) {}
-  Info info() const override {
-    Info i{"toy", "toy", "rounds_done", "round", "items", s_.commit_every};
-    i.passes = s_.passes;
-    i.independent_rounds = s_.independent;
-    return i;
-  }
-  int rounds() const override { return s_.rounds; }
-  bool closing_round() const override { return s_.closing; }
-  std::vector<std::string> state_paths() const override { return {"toy/sum"}; }
-  void start(int done, const StoredState& st) override { sum_ = done > 0 ? st.at("toy/sum")[0] : 0; }
-  Records state() const override { return {{"toy/sum", {1}, {0}, std::vector<double>{sum_}}}; }
-  std::string round_input(int step) override { return s_.independent ? std::string() : "in " + std::to_string(step); }
-  void take_input(int step, const std::string& in) override { log.push_back("input " + std::to_string(step) + " " + in); }
-  std::vector<std::string> items(int step) override {
-    std::vector<std::string> out;
-    for (int k = 0; k < count(step); ++k) out.push_back(pack(int32_t{1000 * step + k}));
-    return out;
-  }
-  std::vector<double> item_costs(int step) const override {
-    std::vector<double> c;
-    if (s_.costed)
-      for (int k = 0; k < count(step); ++k) c.push_back(k + 1);
-    return c;
-  }
-  std::string compute(const std::string& item) override { return item; }
-  void reduce(int step, int64_t i, const std::string& result) override {
-    const int32_t v = unpack<int32_t>(result);
-    EXPECT_EQ(v, 1000 * step + i);  // every result reaches its own step and index
-    sum_ += v;
-    log.push_back("reduce " + std::to_string(step) + " " + std::to_string(i));
-  }
-  Records end_round(int step) override {
-    log.push_back("end " + std::to_string(step));
-    return {{"toy/steps", {static_cast<uint64_t>((s_.rounds + 1) * s_.passes)}, {step}, std::vector<double>{sum_}}};
-  }
-
-  std::vector<std::string> log;
-
- private:
-  int count(int step) const { return s_.items[static_cast<size_t>(step) % s_.items.size()]; }
-  Shape s_;
-  double sum_ = 0;
-};
+using Toy = test::ShapedPlan;
 
 // every call of `plan`'s schedule with `o`, each computed and ended
 std::vector<FarmCall> walk(Plan& plan, const ScheduleOptions& o) {
@@ -126,8 +77,9 @@ TEST(Schedule, IndependentRoundsJoinAFarmUntilItHoldsEnoughItems) {
   EXPECT_EQ(calls[1].rounds, 3);
   EXPECT_EQ(commits_of(calls), (std::vector<int>{3, 6, 9, 10}));  // after each farm holding a commit point
   // every round's items before the first round's results and end
-  const std::vector<std::string> head(plan.log.begin(), plan.log.begin() + 5);
-  EXPECT_EQ(head, (std::vector<std::string>{"input 0 ", "input 1 ", "input 2 ", "reduce 0 0", "reduce 0 1"}));
+  const std::vector<std::string> head(plan.log.begin(), plan.log.begin() + 8);
+  EXPECT_EQ(head, (std::vector<std::string>{"input 0 ", "items 0", "input 1 ", "items 1", "input 2 ", "items 2",
+                                            "reduce 0 0", "reduce 0 1"}));
   // the driver's: kTogetherItemsPerRank items per rank, a commit where a commit point lies among the farm's rounds
   Toy driven({.rounds = 10, .independent = true, .items = {5}});
   const std::vector<FarmCall> d = walk(driven, driver_schedule(0, 1, 4));
@@ -154,8 +106,9 @@ TEST(Schedule, AStepWithoutItemsIsPassedOverAndCostsComeOnlyWhenEveryStepGivesTh
   ASSERT_EQ(calls.size(), 1u);
   EXPECT_EQ(calls[0].first, (std::vector<int64_t>{0, 2, 2, 5}));
   EXPECT_TRUE(calls[0].costs.empty());
-  const std::vector<std::string> want = {"input 0 ", "input 1 ", "input 2 ", "reduce 0 0", "reduce 0 1", "reduce 2 0",
-                                         "reduce 2 1", "reduce 2 2", "end 0", "end 1", "end 2"};
+  const std::vector<std::string> want = {"input 0 ",   "items 0",    "input 1 ",   "items 1",    "input 2 ",
+                                         "items 2",    "reduce 0 0", "reduce 0 1", "reduce 2 0", "reduce 2 1",
+                                         "reduce 2 2", "end 0",      "end 1",      "end 2"};
   EXPECT_EQ(plan.log, want);
 }
 
@@ -213,7 +166,11 @@ TEST(Schedule, AnotherProcessFollowsTheMastersCallsAndTakesTheSameInputs) {
     w.follow(call);
   }
   EXPECT_TRUE(w.done());
-  EXPECT_EQ(worker.log, master.log);  // only inputs so far: the master's results were never reduced
+  // the same inputs: the master's log holds them and its items (its results were never reduced here)
+  std::vector<std::string> inputs;
+  for (const std::string& line : master.log)
+    if (line.rfind("input", 0) == 0) inputs.push_back(line);
+  EXPECT_EQ(worker.log, inputs);
   EXPECT_THROW(w.follow(FarmHead{}), std::logic_error);
 }
 
@@ -237,6 +194,24 @@ TEST(Schedule, RefusesARoundInputOfIndependentRoundsAndPassesWithIndependentRoun
   EXPECT_THROW(s.next(), std::logic_error);
   Toy both({.passes = 2, .independent = true});
   EXPECT_THROW(Schedule(both, ScheduleOptions{}).done(), std::logic_error);
+}
+
+TEST(Schedule, TheDriverAndTheSerialFarmMakeTheSameCallsOfEveryShapeOfPlan) {
+  const std::vector<Toy::Shape> shapes = {
+      {.rounds = 5},
+      {.rounds = 4, .passes = 3, .costed = true},
+      {.rounds = 3, .passes = 2, .closing = true, .items = {2, 0, 4}},
+      {.rounds = 9, .commit_every = 4, .closing = true},
+      {.rounds = 40, .independent = true, .items = {5, 1, 0, 7}},
+      {.rounds = 70, .independent = true, .costed = true, .items = {1}},
+      {.rounds = 6, .independent = true, .closing = true, .items = {20}},
+  };
+  for (size_t k = 0; k < shapes.size(); ++k) {
+    SCOPED_TRACE("shape " + std::to_string(k));
+    auto make = [&] { return std::make_unique<Toy>(shapes[k]); };
+    test::expect_driver_and_serial_calls_agree(make, {1, 2, 3});
+    test::expect_resumed_calls_agree(make, 2);
+  }
 }
 
 }  // namespace
