@@ -310,7 +310,8 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   Progress progress(cfg, info, plan.rounds());
   // the plan's farm calls (stages/schedule.hpp), made on the master and followed by the other ranks
   stages::ScheduleOptions so = stages::driver_schedule(done, size, cfg.output.checkpoint_every);
-  so.ends_farm = [&](int d) { return debug_exit_wanted(info.group, info.counter, d); };  // its commit stays one
+  // the debug exit's commit ends a farm of independent rounds: it stays one farm's commit
+  so.ends_farm = [&](int d) { return debug_exit_wanted(info.group, info.counter, d); };
   Schedule schedule(plan, so);
   DriverClock& clock = driver_clock();
   auto t_round = std::chrono::steady_clock::now();
