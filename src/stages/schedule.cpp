@@ -107,7 +107,8 @@ void Schedule::advance(const FarmHead& head) {
 
 void Schedule::reduce(const FarmCall& call, int64_t item, const std::string& result) {
   // the last step whose items start at or before `item` (a step without items is passed over)
-  const size_t at = static_cast<size_t>(std::upper_bound(call.first.begin(), call.first.end(), item) - call.first.begin()) - 1;
+  const auto after = std::upper_bound(call.first.begin(), call.first.end(), item);
+  const size_t at = static_cast<size_t>(after - call.first.begin()) - 1;
   plan_.reduce(call.steps[at], item - call.first[at], result);
 }
 

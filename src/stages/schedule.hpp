@@ -40,8 +40,8 @@ struct ScheduleOptions {
 };
 
 // the schedule the MPI driver runs on `ranks` ranks from `done` rounds done: every round and the closing round,
-// independent rounds together up to kTogetherItemsPerRank items per rank, a commit every `checkpoint_every`
-// rounds (output.checkpoint_every) and after the last
+// independent rounds together until a farm holds kTogetherItemsPerRank items per rank, a commit every
+// `checkpoint_every` rounds (output.checkpoint_every) and after the last
 ScheduleOptions driver_schedule(int done, int ranks, int checkpoint_every);
 
 // what every process needs of a farm call (the master's is handed to the others)

@@ -85,7 +85,8 @@ Datasets resumed(const Make& make, int cut, SerialOptions o = {}) {
 // the farm calls the MPI driver (mpi/driver.cpp) makes of `plan` on `ranks` ranks, a commit every `every` rounds,
 // from `from` rounds done with the state `stored`: the plan started as the driver starts it, its schedule
 // (driver_schedule) walked by a recording farm that computes every item and hands the results back in item order
-inline std::vector<FarmCall> driver_calls(Plan& plan, int ranks, int every, int from = 0, const StoredState& stored = {}) {
+inline std::vector<FarmCall> driver_calls(Plan& plan, int ranks, int every, int from = 0,
+                                          const StoredState& stored = {}) {
   plan.attributes();
   plan.setup();
   plan.start(from, stored);

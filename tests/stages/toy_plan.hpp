@@ -1,5 +1,6 @@
 // a toy plan of any shape (rounds, passes, independent rounds, a closing round, items per step, costs) that logs
-// the calls made of it: the schedule's tests (tests/stages/schedule_test.cpp) and the driver's (tests/mpi/driver_test.cpp)
+// the calls made of it: the schedule's tests (tests/stages/schedule_test.cpp) and the driver's
+// (tests/mpi/driver_test.cpp)
 #pragma once
 
 #include <gtest/gtest.h>
@@ -36,7 +37,9 @@ class ShapedPlan final : public Plan {
   void start(int done, const StoredState& st) override { sum_ = done > 0 ? st.at("toy/sum")[0] : 0; }
   Records state() const override { return {{"toy/sum", {1}, {0}, std::vector<double>{sum_}}}; }
   std::string round_input(int step) override { return s_.independent ? std::string() : "in " + std::to_string(step); }
-  void take_input(int step, const std::string& in) override { log.push_back("input " + std::to_string(step) + " " + in); }
+  void take_input(int step, const std::string& in) override {
+    log.push_back("input " + std::to_string(step) + " " + in);
+  }
   std::vector<std::string> items(int step) override {
     log.push_back("items " + std::to_string(step));
     std::vector<std::string> out;
