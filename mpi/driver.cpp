@@ -16,8 +16,14 @@
 #include "mpi/checkpoint.hpp"
 #include "mpi/protocol.hpp"
 #include "mpi/scheduler.hpp"
+#include "stages/schedule.hpp"
 
 namespace divcoll::mpi {
+
+using stages::FarmCall;
+using stages::FarmHead;
+using stages::Schedule;
+
 namespace {
 
 // what every rank must know of a record to take part in its write
@@ -30,8 +36,6 @@ template <class Ar>
 void serialize(Ar& ar, RecordHead& h, unsigned) {
   ar & h.path & h.dims & h.type;
 }
-
-std::string bcast_string(MPI_Comm comm, const std::string& s) { return broadcast(comm, s); }
 
 // DIVCOLL_DEBUG_EXIT_IN_COMMIT=<group>:<done> (or <group>@<counter>:<done>, where plans share a group):
 // every rank flushes the file and exits between the state and the counter of that commit (a kill placed by
@@ -150,20 +154,16 @@ DriverClock& driver_clock() {
   return clock;
 }
 
-void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
-           const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const Plan::Info info = plan.info();
-  const std::string& label = info.label;
-  if (!file.has(info.group)) file.create_group(info.group);
-  io::h5::Node group = file.group(info.group);
+namespace {
+
+// writes the plan's attributes and the rows it draws once, reads the rounds done and the state committed with
+// them, and starts the master's plan from there; returns the rounds done
+int start_plan(MPI_Comm comm, io::h5::File& file, const io::h5::Node& group, Plan& plan, const Plan::Info& info,
+               int rank) {
   for (const Attribute& a : plan.attributes()) write_attribute(file, info.group, a.name, a.value);
   write_records(comm, file, rank == 0 ? plan.setup() : Records{});
-  const int R = plan.rounds(), passes = info.passes;
-  DIVCOLL_DEMAND(passes >= 1);
+  const int R = plan.rounds();
   const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
-
   // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
   // alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp); the master's plan holds it
   StoredState stored;
@@ -178,166 +178,174 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   if (rank == 0) {
     plan.start(done, stored);
     if (done >= R)
-      std::printf("%s: all %d %ss were already done\n", label.c_str(), R, info.round_word.c_str());
+      std::printf("%s: all %d %ss were already done\n", info.label.c_str(), R, info.round_word.c_str());
     else if (done > 0)
-      std::printf("%s: resuming after %s %d\n", label.c_str(), info.round_word.c_str(), done);
+      std::printf("%s: resuming after %s %d\n", info.label.c_str(), info.round_word.c_str(), done);
   }
-  // A round's rows and the state of its commit wait on the master until a commit copies the run file to its
-  // checkpoint (or the drive ends): --resume only ever starts from a copy, so rows and state written between
-  // copies were never used, and writing them every round made the workers wait for each write. Rows of one
-  // dataset from many rounds then go out in one write. With output.checkpoint_interval_s = 0 every commit
-  // copies, and every round is written at its commit as before.
-  RecordQueue deferred;
-  int pending_done = -1;  // the rounds done of the commit not yet written, -1: none
-  double records_s = 0;   // time in flush() writing rows (reset by `timed` below)
-  auto flush = [&] {
+  return done;
+}
+
+// A plan's rows and commits. A round's rows and the state of its commit wait on the master until a commit copies
+// the run file to its checkpoint (or the drive ends): --resume only ever starts from a copy, so rows and state
+// written between copies were never used, and writing them every round made the workers wait for each write.
+// Rows of one dataset from many rounds then go out in one write. With output.checkpoint_interval_s = 0 every
+// commit copies, and every round is written at its commit. Every rank holds one and calls it at the same points.
+class Writes {
+ public:
+  Writes(MPI_Comm comm, io::h5::File& file, const io::h5::Node& group, Plan& plan, const Plan::Info& info,
+         const std::function<void()>& checkpoint)
+      : comm_(comm), file_(file), group_(group), plan_(plan), info_(info), checkpoint_(checkpoint),
+        defer_([this] { write(); }, [this] { return waiting_.bytes() > kDeferredMaxBytes; }) {
+    MPI_Comm_rank(comm, &rank_);
+  }
+  // master: rows to write
+  void add(Records records) { waiting_.add(std::move(records)); }
+  // writes what waits, and the commit not yet written
+  void flush() { timed([&] { write(); }); }
+  // commits `done` rounds: its state and counter are written with the rows before the next copy
+  void commit(int done) {
+    timed([&] {
+      pending_done_ = done;
+      // the debug exit sits between this commit's state and counter: they are written now, copy or not
+      if (debug_exit_wanted(info_.group, info_.counter, done)) write();
+      checkpoint_();
+    });
+  }
+
+ private:
+  void write() {
     const auto tr = std::chrono::steady_clock::now();
-    write_records(comm, file, rank == 0 ? deferred.take() : Records{});
-    records_s += since(tr);
-    const int done_now = broadcast(comm, pending_done);
-    if (done_now < 0) return;
-    write_records(comm, file, rank == 0 ? plan.state() : Records{});
+    write_records(comm_, file_, rank_ == 0 ? waiting_.take() : Records{});
+    records_s_ += since(tr);
+    const int done = broadcast(comm_, pending_done_);
+    if (done < 0) return;
+    write_records(comm_, file_, rank_ == 0 ? plan_.state() : Records{});
     using Counts = std::vector<std::pair<std::string, int64_t>>;
-    for (const auto& [name, value] : broadcast(comm, rank == 0 ? plan.state_attributes() : Counts{}))
-      write_attribute(file, info.group, name, value);
-    debug_exit_in_commit(comm, file, info.group, info.counter, done_now);
-    group.write_int(info.counter, done_now);
-    pending_done = -1;
-  };
-  // rank 0 asks for a copy (which writes what waits) once it holds more than this
-  constexpr size_t kDeferredMaxBytes = size_t{256} << 20;
-  DeferredWrites defer(flush, [&] { return deferred.bytes() > kDeferredMaxBytes; });
-  auto commit = [&](int rounds_done) {
-    pending_done = rounds_done;
-    // the debug exit sits between this commit's state and counter: they are written now, copy or not
-    if (debug_exit_wanted(info.group, info.counter, rounds_done)) flush();
-    checkpoint();
-  };
-
-  DriverClock& clock = driver_clock();
+    for (const auto& [name, value] : broadcast(comm_, rank_ == 0 ? plan_.state_attributes() : Counts{}))
+      write_attribute(file_, info_.group, name, value);
+    debug_exit_in_commit(comm_, file_, info_.group, info_.counter, done);
+    group_.write_int(info_.counter, done);
+    pending_done_ = -1;
+  }
   // runs a flush or a commit (which may flush): the time writing rows counts as writes, the rest as commits
-  auto timed = [&](const auto& f) {
+  template <class F>
+  void timed(const F& f) {
+    DriverClock& clock = driver_clock();
     const auto tc = std::chrono::steady_clock::now();
-    records_s = 0;
+    records_s_ = 0;
     f();
-    clock.writes_s += records_s;
-    clock.commits_s += since(tc) - records_s;
-  };
+    clock.writes_s += records_s_;
+    clock.commits_s += since(tc) - records_s_;
+  }
 
-  const auto t_stage = std::chrono::steady_clock::now();
-  double last_print = -1e9;
-  const int end = R + (plan.closing_round() ? 1 : 0);
-  int size = 1;
+  // rank 0 asks for a copy (which writes what waits) once it holds more than this
+  static constexpr size_t kDeferredMaxBytes = size_t{256} << 20;
+  MPI_Comm comm_;
+  io::h5::File& file_;
+  const io::h5::Node& group_;
+  Plan& plan_;
+  const Plan::Info& info_;
+  const std::function<void()>& checkpoint_;
+  int rank_ = 0;
+  RecordQueue waiting_;
+  int pending_done_ = -1;  // the rounds done of the commit not yet written, -1: none
+  double records_s_ = 0;   // time in write() writing rows (reset by timed())
+  DeferredWrites defer_;   // last: a copy may flush once the rest is ready
+};
+
+// the master's progress lines: during a farm every run.progress_every_s, and a line for each round it ends
+class Progress {
+ public:
+  Progress(const io::RunConfig& cfg, const Plan::Info& info, int rounds) : cfg_(cfg), info_(info), R_(rounds) {}
+  void farming(const FarmHead& call, int k, int n) {
+    const double now = since(t_stage_);
+    if (cfg_.run.progress_every_s <= 0 || now - last_print_ < cfg_.run.progress_every_s) return;
+    last_print_ = now;
+    const int r = call.round, m = call.rounds;
+    const std::string rounds = m > 1 ? std::to_string(r + 1) + "-" + std::to_string(r + m) : std::to_string(r + 1);
+    std::printf("%s: %s %s/%d, %d/%d %s, %.1f s\n", info_.label.c_str(), info_.round_word.c_str(), rounds.c_str(), R_,
+                k, n, info_.item_word.c_str(), now);
+    std::fflush(stdout);
+  }
+  // `call` ended its rounds, `items` computed in `dt` seconds since the first of its passes started
+  void rounds_done(const Plan& plan, const FarmHead& call, size_t items, double dt) {
+    const double el = since(t_stage_);
+    const int r = call.round, m = call.rounds;
+    for (int k = 0; k < m; ++k)
+      std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", info_.label.c_str(), info_.round_word.c_str(),
+                  r + k + 1, R_, plan.summary(r + k).c_str(), items / dt, info_.item_word.c_str(), el,
+                  (R_ - r - m) * dt / m);
+    std::fflush(stdout);
+  }
+
+ private:
+  const io::RunConfig& cfg_;
+  const Plan::Info& info_;
+  const int R_;
+  const std::chrono::steady_clock::time_point t_stage_ = std::chrono::steady_clock::now();
+  double last_print_ = -1e9;
+};
+
+// the call's items over the ranks; the master hands each result to its step as it comes (in item order)
+void farm_call(MPI_Comm comm, Plan& plan, Schedule& schedule, FarmCall& call, Progress& progress) {
+  FarmOptions fo;
+  fo.costs = std::move(call.costs);  // the farm hands out the dearest first
+  fo.on_result = [&](int64_t i, const std::string& bytes) { schedule.reduce(call, i, bytes); };
+  fo.progress = [&](int k, int n) { progress.farming(call, k, n); };
+  farm(comm, call.items, [&](const std::string& b) { return plan.compute(b); }, fo);
+}
+
+}  // namespace
+
+void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+           const std::function<void()>& checkpoint) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
-  DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
-  for (int r = done; r < end;) {
+  const Plan::Info info = plan.info();
+  if (!file.has(info.group)) file.create_group(info.group);
+  const io::h5::Node group = file.group(info.group);
+  const int done = start_plan(comm, file, group, plan, info, rank);
+  Writes writes(comm, file, group, plan, info, checkpoint);
+  Progress progress(cfg, info, plan.rounds());
+  // the plan's farm calls (stages/schedule.hpp), made on the master and followed by the other ranks
+  stages::ScheduleOptions so = stages::driver_schedule(done, size, cfg.output.checkpoint_every);
+  // the debug exit's commit ends a farm of independent rounds: it stays one farm's commit
+  so.ends_farm = [&](int d) { return debug_exit_wanted(info.group, info.counter, d); };
+  Schedule schedule(plan, so);
+  DriverClock& clock = driver_clock();
+  auto t_round = std::chrono::steady_clock::now();
+  size_t round_items = 0;  // the master's items of the round's passes so far
+  while (!schedule.done()) {
     // the closing round changes the plan's state: a commit still waiting is written with its own state first
-    if (r >= R) timed(flush);
-    const auto t0 = std::chrono::steady_clock::now();
-    // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
-    std::vector<std::string> items;
-    std::vector<int64_t> first = {0};  // where each step's items start in `items`
-    std::vector<double> costs;         // the plan's cost estimates of `items`, if it gave them for every step
-    bool costed = true;
-    auto add_costs = [&](int step, size_t count) {
-      std::vector<double> c = plan.item_costs(step);
-      DIVCOLL_DEMAND(c.empty() || c.size() == count);
-      costed = costed && !c.empty();
-      costs.insert(costs.end(), c.begin(), c.end());
-    };
-    int m = 0;
-    auto tp = std::chrono::steady_clock::now();
-    auto lap = [&](double& into) {
-      const auto now = std::chrono::steady_clock::now();
-      into += std::chrono::duration<double>(now - tp).count();
-      tp = now;
-    };
-    const bool together = info.independent_rounds && r < R;
-    if (together) {
-      if (rank == 0)
-        do {
-          const std::string in = plan.round_input(r + m);
-          DIVCOLL_DEMAND(in.empty());
-          plan.take_input(r + m, in);
-          std::vector<std::string> more = plan.items(r + m);
-          add_costs(r + m, more.size());
-          std::move(more.begin(), more.end(), std::back_inserter(items));
-          first.push_back(static_cast<int64_t>(items.size()));
-          ++m;
-        } while (r + m < R && items.size() < kTogetherItemsPerRank * static_cast<size_t>(size) &&
-                 !debug_exit_wanted(info.group, info.counter, r + m));  // the debug exit's commit stays one
-      m = broadcast(comm, m);
-      if (rank != 0)
-        for (int k = 0; k < m; ++k) plan.take_input(r + k, std::string());
-      lap(clock.items_s);
-    } else {
-      m = 1;
-    }
-    size_t n_items = 0;
-    for (int pass = 0; pass < passes; ++pass) {
-      const int step = r * passes + pass;
-      if (!together) {
-        plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
-        lap(clock.input_s);
-        items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
-        costs.clear(), costed = true;
-        if (rank == 0) add_costs(step, items.size());
-        first = {0, static_cast<int64_t>(items.size())};
-        lap(clock.items_s);
-      }
-      n_items += items.size();
-      FarmOptions fo;
-      if (rank == 0 && costed) fo.costs = std::move(costs);  // the farm hands out the dearest first
-      size_t at = 0;  // the step of the latest result (results come in item order)
-      fo.on_result = [&](int64_t i, const std::string& bytes) {
-        while (i >= first[at + 1]) ++at;
-        plan.reduce(together ? r + static_cast<int>(at) : step, i - first[at], bytes);
-      };
-      fo.progress = [&](int k, int n) {
-        const double now = since(t_stage);
-        if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
-          last_print = now;
-          const std::string rounds = m > 1 ? std::to_string(r + 1) + "-" + std::to_string(r + m) : std::to_string(r + 1);
-          std::printf("%s: %s %s/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), rounds.c_str(), R, k,
-                      n, info.item_word.c_str(), now);
-          std::fflush(stdout);
-        }
-      };
-      farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
-      tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
-      if (rank == 0) {
-        if (together)
-          for (int k = 0; k < m; ++k) deferred.add(plan.end_round(r + k));
-        else
-          deferred.add(plan.end_round(step));
-      }
-      lap(clock.writes_s);
-    }
-    clock.rounds += m;
-    if (r >= R) {  // the closing round: recorded, not counted
-      timed(flush);
-      ++r;
+    if (schedule.closing_next()) writes.flush();
+    if (schedule.pass() == 0) t_round = std::chrono::steady_clock::now(), round_items = 0;
+    FarmCall call = rank == 0 ? schedule.next() : FarmCall{};
+    const auto tb = std::chrono::steady_clock::now();
+    const FarmHead head = broadcast(comm, static_cast<const FarmHead&>(call));
+    if (rank != 0) schedule.follow(head), static_cast<FarmHead&>(call) = head;
+    clock.input_s += since(tb);
+    round_items += call.items.size();
+    farm_call(comm, plan, schedule, call, progress);
+    const auto tw = std::chrono::steady_clock::now();
+    if (rank == 0) writes.add(schedule.end(call));
+    clock.writes_s += since(tw);
+    if (!call.ends_rounds) continue;
+    clock.rounds += call.rounds;
+    if (call.closing) {  // the closing round: recorded, not counted
+      writes.flush();
       continue;
     }
-    // a commit after the last round of this farm if a commit point (every `every` rounds, the last round) lies
-    // among its rounds: the state is the state after all of them
-    const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
-    if ((r + m) / every > r / every || r + m == R) timed([&] { commit(r + m); });
-    if (rank == 0) {
-      const double dt = since(t0), el = since(t_stage);
-      for (int k = 0; k < m; ++k)
-        std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(),
-                    r + k + 1, R, plan.summary(r + k).c_str(), n_items / dt, info.item_word.c_str(), el,
-                    (R - r - m) * dt / m);
-      std::fflush(stdout);
-    }
-    r += m;
+    if (call.commit) writes.commit(call.round + call.rounds);
+    if (rank == 0) progress.rounds_done(plan, call, round_items, since(t_round));
   }
-  timed(flush);  // what still waits is written before the stage goes on (its later steps and stages read it)
+  clock.input_s += schedule.input_s();
+  clock.items_s += schedule.items_s();
+  writes.flush();  // what still waits is written before the stage goes on (its later steps and stages read it)
   write_records(comm, file, rank == 0 ? plan.finish() : Records{});
   if (rank == 0) {
     const std::string s = plan.finish_summary();
-    if (!s.empty()) std::printf("%s: %s\n", label.c_str(), s.c_str());
+    if (!s.empty()) std::printf("%s: %s\n", info.label.c_str(), s.c_str());
     std::fflush(stdout);
   }
 }

@@ -1,8 +1,12 @@
 // the one driver: runs any stage's plan (stages/plan.hpp) over the ranks.
 //
-// It owns what every stage shares: the round counter and resume, the task farm (mpi/scheduler.hpp) and the
-// gathering of results in item order, writing the plan's rows (every rank takes part in each write: parallel
-// HDF5), the commit of a round's state with its counter, progress lines with an ETA, and the stage's timing.
+// What the plan's rounds turn into, farm call by farm call (the steps, their items and costs, where a commit
+// falls), is the plan's schedule (stages/schedule.hpp), the same the serial farm walks. The driver does the MPI
+// work around it: the master makes each call and broadcasts what the other ranks need of it (its steps and their
+// inputs), the task farm (mpi/scheduler.hpp) computes its items, results go to the plan in item order; and it owns
+// what every stage shares: the round counter and resume, writing the plan's rows (every rank takes part in each
+// write: parallel HDF5), the commit of a round's state with its counter, progress lines with an ETA, and the
+// stage's timing.
 //
 // Commit: the plan's state and the counter are written together and then checkpointed (mpi/checkpoint.hpp),
 // one step; --resume starts from the last checkpoint, never from what a killed job left in the run file
@@ -37,11 +41,6 @@ using stages::Plan;
 using stages::Record;
 using stages::Records;
 using stages::StoredState;
-
-// a plan's independent rounds (Plan::Info::independent_rounds) are farmed together until a farm has this many
-// items per rank: a farm's tail costs each rank about half an item, under 2% of a farm of 32 items per rank
-// (at 8, the quick preset's scaling rounds lost 4% of a worker's time in their tails)
-inline constexpr size_t kTogetherItemsPerRank = 32;
 
 // runs (or resumes) `plan` on `comm` until its rounds are done; every rank calls it with its own plan
 // object (built from the same inputs). `checkpoint` is called (collectively) at each commit: after every

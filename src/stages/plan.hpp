@@ -5,7 +5,8 @@
 // item order (so a round's reduction does not depend on the rank count), then asks it what the round records.
 // Between rounds it commits the plan's state and the round counter together, as one checkpoint step, and
 // resumes from the last commit. The serial farm (stages/serial.hpp) runs the same methods in one process,
-// without files. The plan's methods run on the master unless noted; compute() runs on every rank.
+// without files. Both follow the plan's schedule (stages/schedule.hpp): which calls are made in which order is
+// decided there, once. The plan's methods run on the master unless noted; compute() runs on every rank.
 //
 // To add a stage: write its plan (this interface) and its rows in the run-file schema (src/io/run_file.cpp).
 #pragma once
@@ -54,11 +55,11 @@ class Plan {
     // results) is counted and committed as one. The methods marked (step) get step = round · passes + pass
     int passes = 1;
     // rounds that need nothing from each other (no round input; compute() reads only its item): the driver
-    // farms several in one call when a round alone has few items per rank (kTogetherItemsPerRank, mpi/driver.hpp;
-    // its tail, where ranks wait for the last item, would be a large share), and commits after the last of
-    // them. Each is still reduced,
-    // recorded and counted as its own round, but items() of the later rounds comes before the earlier
-    // rounds' reduce() and end_round(), so the plan keeps a round's results by its step. Passes must be 1
+    // farms several in one call when a round alone has few items per rank (kTogetherItemsPerRank,
+    // stages/schedule.hpp; its tail, where ranks wait for the last item, would be a large share), and commits
+    // after the last of them. Each is still reduced, recorded and counted as its own round, but items() of the
+    // later rounds comes before the earlier rounds' reduce() and end_round(), so the plan keeps a round's
+    // results by its step. Passes must be 1
     bool independent_rounds = false;
   };
   virtual Info info() const = 0;

@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -35,6 +36,16 @@ std::vector<size_t> compute_order(size_t n, const std::vector<double>& costs, co
   return order;
 }
 
+// the schedule of a serial run with `o`
+ScheduleOptions schedule_options(const SerialOptions& o) {
+  ScheduleOptions s = o.ranks > 0 ? driver_schedule(o.from, o.ranks, o.checkpoint_every) : ScheduleOptions{};
+  s.from = o.from;
+  s.until = o.until;
+  s.commit_every = o.checkpoint_every;
+  if (o.ranks <= 0) s.together_rounds = std::max(1, o.rounds_per_farm);
+  return s;
+}
+
 }  // namespace
 
 Records SerialRun::written() const {
@@ -47,84 +58,33 @@ Records SerialRun::written() const {
 
 SerialRun run_serial(Plan& plan, const SerialOptions& o, Plan* worker) {
   SerialRun run;
-  const Plan::Info info = plan.info();
-  const int R = plan.rounds(), passes = info.passes;
-  if (passes < 1) throw std::logic_error(info.label + ": passes < 1");
-  if (info.independent_rounds && passes != 1) throw std::logic_error(info.label + ": independent rounds with passes");
   run.attributes = plan.attributes();
   run.setup = plan.setup();
   plan.start(o.from, o.stored);
-  const int stop = o.until < 0 ? R : std::min(o.until, R);
-  const int end = o.until < 0 && plan.closing_round() ? R + 1 : stop;
+  Schedule schedule(plan, schedule_options(o));
+  std::optional<Schedule> follower;
+  if (worker) follower.emplace(*worker, schedule_options(o));
   Plan& computing = worker ? *worker : plan;
-
-  // one farm of `steps` (their items already made, `first[k]` where step k's start): compute, then reduce in
-  // item order
-  auto farm = [&](const std::vector<int>& steps, const std::vector<std::string>& items, const std::vector<int64_t>& first,
-                  const std::vector<double>& costs) {
-    std::vector<std::string> results(items.size());
-    for (size_t i : compute_order(items.size(), costs, o)) results[i] = computing.compute(items[i]);
-    run.items += static_cast<int64_t>(items.size());
-    size_t at = 0;
-    for (size_t i = 0; i < items.size(); ++i) {
-      while (static_cast<int64_t>(i) >= first[at + 1]) ++at;
-      plan.reduce(steps[at], static_cast<int64_t>(i) - first[at], results[i]);
-    }
-    for (int step : steps) add(run.rounds, plan.end_round(step));
-  };
-  auto costs_of = [&](int step, size_t count, std::vector<double>& costs, bool& costed) {
-    std::vector<double> c = plan.item_costs(step);
-    if (!c.empty() && c.size() != count)
-      throw std::logic_error(info.label + ": item_costs gives " + std::to_string(c.size()) + " costs for " +
-                             std::to_string(count) + " items");
-    costed = costed && !c.empty();
-    costs.insert(costs.end(), c.begin(), c.end());
-  };
-
-  int r = o.from;
   auto take_state = [&] {
     run.state = plan.state();
     run.state_attributes = plan.state_attributes();
   };
-  if (r >= stop) take_state();
-  while (r < end) {
-    std::vector<std::string> items;
-    std::vector<double> costs;
-    bool costed = true;
-    if (info.independent_rounds && r < R) {
-      std::vector<int> steps;
-      std::vector<int64_t> first = {0};
-      for (int k = 0; k < std::max(1, o.rounds_per_farm) && r + k < stop; ++k) {
-        const std::string in = plan.round_input(r + k);
-        if (!in.empty()) throw std::logic_error(info.label + ": a plan with independent rounds has a round input");
-        plan.take_input(r + k, in);
-        if (worker) worker->take_input(r + k, in);
-        std::vector<std::string> more = plan.items(r + k);
-        costs_of(r + k, more.size(), costs, costed);
-        std::move(more.begin(), more.end(), std::back_inserter(items));
-        first.push_back(static_cast<int64_t>(items.size()));
-        steps.push_back(r + k);
-      }
-      farm(steps, items, first, costed ? costs : std::vector<double>{});
-      for (int step : steps) run.summaries.push_back(plan.summary(step));
-      r += static_cast<int>(steps.size());
-    } else {
-      for (int pass = 0; pass < passes; ++pass) {
-        const int step = r * passes + pass;
-        const std::string in = plan.round_input(step);
-        plan.take_input(step, in);
-        if (worker) worker->take_input(step, in);
-        items = plan.items(step);
-        costs.clear(), costed = true;
-        costs_of(step, items.size(), costs, costed);
-        farm({step}, items, {0, static_cast<int64_t>(items.size())}, costed ? costs : std::vector<double>{});
-      }
-      if (r < R) run.summaries.push_back(plan.summary(r));
-      ++r;
-    }
-    if (r == stop) take_state();
+  if (o.from >= schedule.stop()) take_state();
+  while (!schedule.done()) {
+    FarmCall call = schedule.next();
+    if (follower) follower->follow(call);
+    if (o.on_farm) o.on_farm(call);
+    // compute in the order asked for, then reduce in item order
+    std::vector<std::string> results(call.items.size());
+    for (size_t i : compute_order(call.items.size(), call.costs, o)) results[i] = computing.compute(call.items[i]);
+    run.items += static_cast<int64_t>(call.items.size());
+    for (size_t i = 0; i < results.size(); ++i) schedule.reduce(call, static_cast<int64_t>(i), results[i]);
+    add(run.rounds, schedule.end(call));
+    if (!call.ends_rounds || call.closing) continue;
+    for (int k = 0; k < call.rounds; ++k) run.summaries.push_back(plan.summary(call.round + k));
+    if (call.commit && call.round + call.rounds == schedule.stop()) take_state();  // the last commit's state
   }
-  run.done = std::min(r, R);
+  run.done = schedule.rounds_done();
   if (o.until < 0) {
     run.finish = plan.finish();
     run.finish_summary = plan.finish_summary();

@@ -1,21 +1,22 @@
-// the serial farm: runs a plan (stages/plan.hpp) in one process, calling its methods in the order the driver
-// (mpi/driver.hpp) calls them over ranks, without files, and returns what it records. The tests run every stage's
-// plans through it (tests/stages/).
+// the serial farm: runs a plan (stages/plan.hpp) in one process, without files, and returns what it records. It
+// walks the plan's schedule (stages/schedule.hpp), the same sequence of farm calls the driver (mpi/driver.hpp)
+// makes over ranks: each call's items computed (in the order SerialOptions::order says), reduced in item order and
+// their steps ended. The tests run every stage's plans through it (tests/stages/).
 //
-// Per round (per pass of one, with Plan::Info::passes > 1): round_input, take_input, items and item_costs, every
-// item's compute (in the order SerialOptions::order says), reduce in item order, end_round, summary. Rounds of a
-// plan with independent rounds may be farmed together as the driver does (SerialOptions::rounds_per_farm): the
-// items of every round of the farm first, then each round reduced and ended. The state is taken where the driver
-// commits its last one: after the last counted round run, before the closing round.
+// Independent rounds are farmed one round a call unless SerialOptions asks for more (rounds_per_farm), or for the
+// driver's own farms at some rank count (ranks). The state is taken where the driver commits its last one: after
+// the last counted round run, before the closing round.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "stages/plan.hpp"
+#include "stages/schedule.hpp"
 
 namespace divcoll::stages {
 
@@ -27,6 +28,9 @@ struct SerialOptions {
   enum class Order { items, dearest_first, reversed, shuffled } order = Order::items;
   uint64_t shuffle_seed = 0;  // Order::shuffled
   int rounds_per_farm = 1;    // a plan with independent rounds: rounds farmed together (at most)
+  int ranks = 0;              // > 0: farms as the driver's on this many ranks (driver_schedule; rounds_per_farm unused)
+  int checkpoint_every = 1;   // rounds per commit (output.checkpoint_every; Plan::Info::commit_every wins)
+  std::function<void(const FarmCall&)> on_farm;  // sees every farm call before its items are computed
 };
 
 struct SerialRun {

@@ -1,6 +1,6 @@
 // the driver (mpi/driver.hpp): what waits between copies is merged per dataset, a plan's every row, its state
-// and its counter are in the run file when drive() returns, and independent rounds farmed together are each
-// reduced and recorded as their own; at 1 to 4 ranks
+// and its counter are in the run file when drive() returns, independent rounds farmed together are each
+// reduced and recorded as their own, and the driver calls a plan as the serial farm does; at 1 to 4 ranks
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -15,6 +15,9 @@
 #include "io/h5.hpp"
 #include "mpi/driver.hpp"
 #include "mpi/protocol.hpp"
+#include "stages/schedule.hpp"
+#include "stages/serial.hpp"
+#include "stages/toy_plan.hpp"
 
 namespace divcoll {
 namespace {
@@ -177,13 +180,13 @@ class IndependentPlan final : public mpi::Plan {
 };
 
 TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) {
-  const int R = 3 * static_cast<int>(mpi::kTogetherItemsPerRank) + 5;  // one item per round: farms of several
+  const int R = 3 * static_cast<int>(stages::kTogetherItemsPerRank) + 5;  // one item per round: farms of several
   int commits = 0;
   IndependentPlan plan(R);
   const std::string path = drive_into("ind.h5", plan, 1, [&] { ++commits; });
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const int per_farm = static_cast<int>(mpi::kTogetherItemsPerRank) * size;
+  const int per_farm = static_cast<int>(stages::kTogetherItemsPerRank) * size;
   EXPECT_EQ(commits, (R + per_farm - 1) / per_farm) << "one commit per farm of kTogetherItemsPerRank rounds per rank";
   if (rank_of() == 0) {
     std::vector<int> in_order(R);
@@ -195,6 +198,42 @@ TEST(Drive, IndependentRoundsFarmedTogetherAreEachReducedAndRecordedAsTheirOwn) 
     for (int r = 0; r < R; ++r) EXPECT_EQ(v[r], 100 + r);
     EXPECT_EQ(f.group("ind").read_int("rounds_done"), R);
     std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+  }
+}
+
+
+// the driver calls a plan as its schedule says, as the serial farm set to farm as the driver does on this many
+// ranks calls it: the master's plan takes the same inputs, makes the same items, reduces the same results and
+// ends the same steps in the same order, and a checkpoint comes at each commit the schedule names
+TEST(Drive, CallsAPlanAsTheSerialFarmDoesAtThisRankCount) {
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  using Shape = stages::test::ShapedPlan::Shape;
+  const std::vector<std::pair<Shape, int>> cases = {  // a plan's shape, output.checkpoint_every
+      {{.rounds = 5}, 2},
+      {{.rounds = 4, .passes = 3, .costed = true}, 1},
+      {{.rounds = 3, .passes = 2, .closing = true, .items = {2, 0, 4}}, 2},
+      {{.rounds = 9, .commit_every = 4, .closing = true}, 1},
+      {{.rounds = 40, .independent = true, .items = {5, 1, 0, 7}}, 3},
+      {{.rounds = 70, .independent = true, .costed = true, .items = {1}}, 1},
+  };
+  for (size_t k = 0; k < cases.size(); ++k) {
+    SCOPED_TRACE("case " + std::to_string(k));
+    const auto& [shape, every] = cases[k];
+    stages::test::ShapedPlan driven(shape);
+    int checkpoints = 0;
+    const std::string path = drive_into("shaped.h5", driven, every, [&] { ++checkpoints; });
+    if (rank_of() != 0) continue;
+    std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+    stages::test::ShapedPlan serial(shape);
+    stages::SerialOptions o;
+    o.ranks = size;
+    o.checkpoint_every = every;
+    int commits = 0;
+    o.on_farm = [&](const stages::FarmCall& call) { commits += call.commit; };
+    stages::run_serial(serial, o);
+    EXPECT_EQ(driven.log, serial.log);
+    EXPECT_EQ(checkpoints, commits);
   }
 }
 

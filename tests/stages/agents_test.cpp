@@ -171,5 +171,16 @@ TEST(AgentsPlan, AFixedBodyAndSpringsReachEveryAgentOfGenerationZero) {
   EXPECT_EQ(d.count("graded/x/agents/final/params"), 1u);
 }
 
+
+TEST(AgentsPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  const io::RunConfig cfg = config();
+  auto make = [&] { return make_agents_plan(agents_def(cfg), AgentsSpec{}, {}); };
+  test::expect_driver_and_serial_calls_agree(make);
+  // resumed: the runner builds the plan from the last committed generation's survivors
+  test::expect_resumed_calls_agree(make, 1, [&](const SerialRun& first) {
+    return make_agents_plan(agents_def(cfg), AgentsSpec{}, survivors(test::written(first), gen_name("agents", 0)));
+  });
+}
+
 }  // namespace
 }  // namespace divcoll::stages

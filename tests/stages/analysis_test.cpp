@@ -123,5 +123,14 @@ TEST(FamiliarityPlan, FitsEachNovelEnvironmentAgainstFlatAndTabulatesTheCells) {
   test::expect_same(test::written(run_serial(*master, o, worker.get())), d);
 }
 
+
+TEST(AnalysisPlans, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  const Case c;
+  auto adversity = [&] { return c.adversity(); };
+  test::expect_driver_and_serial_calls_agree(adversity);
+  test::expect_resumed_calls_agree(adversity, 1);
+  test::expect_driver_and_serial_calls_agree([&] { return c.familiarity(); });
+}
+
 }  // namespace
 }  // namespace divcoll::stages

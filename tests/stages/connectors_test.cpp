@@ -120,5 +120,19 @@ TEST(ConnectorsPlan, TheExtendedPlanKeepsTheBestWeightsAndResumesToTheSameRun) {
   for (int cut = 1; cut < 3; ++cut) test::expect_same(test::resumed([&] { return c.plan(); }, cut), want);
 }
 
+
+TEST(ConnectorsPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  // the plain plan, the extended one (keep-best: a closing round) and the evolution strategy
+  for (const std::vector<std::string>& keys :
+       {std::vector<std::string>{}, {"connectors.keep_best=true", "connectors.validation_pairs=2"},
+        {"connectors.optimizer=es"}}) {
+    SCOPED_TRACE(keys.empty() ? std::string("plain") : keys[0]);
+    const Case c(keys);
+    auto make = [&] { return c.plan(); };
+    test::expect_driver_and_serial_calls_agree(make);
+    test::expect_resumed_calls_agree(make, 1);
+  }
+}
+
 }  // namespace
 }  // namespace divcoll::stages

@@ -140,5 +140,13 @@ TEST(DeployPlan, AWorkersPlanAnyComputeOrderAndAResumeGiveTheSameRows) {
   test::expect_same(test::resumed([&] { return c.plan(); }, 1), want);
 }
 
+
+TEST(DeployPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  const Case c;
+  auto make = [&] { return c.plan(); };
+  test::expect_driver_and_serial_calls_agree(make);
+  test::expect_resumed_calls_agree(make, 1);
+}
+
 }  // namespace
 }  // namespace divcoll::stages

@@ -90,5 +90,13 @@ TEST(EpisodesPlan, EpisodeCostsCountNetworksAndOkMeanLeavesFailuresOut) {
   EXPECT_EQ(x.size(), 4u);
 }
 
+
+TEST(EpisodesPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  const Case c;
+  auto make = [&] { return c.plan(); };
+  test::expect_driver_and_serial_calls_agree(make);
+  test::expect_resumed_calls_agree(make, 1);
+}
+
 }  // namespace
 }  // namespace divcoll::stages

@@ -89,5 +89,28 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
   test::expect_same(test::written(run_serial(*make(), o)), d);
 }
 
+
+TEST(Graded, TheDriverAndTheSerialFarmMakeTheSameFarmCallsOfItsPopulationsAndTheirDeployment) {
+  const io::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
+                                        "graded.population=3", "connectors.replicates=1", "agents.uniqueness_k=2",
+                                        "agents.episode_steps=40", "agents.epochs=1", "agents.generations=1"});
+  // the populations through the agents plan
+  Rng rng = make_rng(8, 8, 8);
+  const morph::Agent body = collective::random_agent(rng);
+  for (int v : {0, 1}) {
+    SCOPED_TRACE("population " + std::to_string(v));
+    const auto [def, spec] = graded_agents(graded_def(cfg), v, GradedShape{body.cells, body.springs});
+    test::expect_driver_and_serial_calls_agree([&] { return make_agents_plan(def, spec, {}); });
+  }
+  // their deployment
+  const std::vector<morph::Agent> agents = test::random_population(3, 9);
+  Rng wr = make_rng(2, 2, 2);
+  const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr)};
+  const std::vector<std::pair<int, int>> pairs = {{0, 2}, {1, 0}};
+  auto make = [&] { return make_graded_deploy_plan(graded_def(cfg), 0, agents, weights, pairs); };
+  test::expect_driver_and_serial_calls_agree(make);
+  test::expect_resumed_calls_agree(make, 1);
+}
+
 }  // namespace
 }  // namespace divcoll::stages

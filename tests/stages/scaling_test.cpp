@@ -79,5 +79,13 @@ TEST(ScalingPlan, RoundsFarmedTogetherTheDearestFirstAndAResumeGiveTheSameRows) 
   test::expect_same(test::resumed([&] { return c.plan(); }, 1), want);
 }
 
+
+TEST(ScalingPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
+  const Case c;
+  auto make = [&] { return c.plan(); };
+  test::expect_driver_and_serial_calls_agree(make);
+  test::expect_resumed_calls_agree(make, 1);
+}
+
 }  // namespace
 }  // namespace divcoll::stages
