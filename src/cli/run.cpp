@@ -27,6 +27,7 @@
 #include "cli/commands.hpp"
 #include "io/file_lock.hpp"
 #include "config/pipeline.hpp"
+#include "io/run_file.hpp"
 #include "io/run_read.hpp"
 #include "mpi/agree.hpp"
 #include "mpi/checkpoint.hpp"
@@ -98,21 +99,7 @@ void derive_run_file(const std::string& base, const std::string& path, const std
   fs::copy_file(base, tmp, fs::copy_options::overwrite_existing);
   {
     io::h5::File f = io::h5::File::open(tmp, true);
-    bool later = false;
-    for (const std::string& s : io::stage_names()) {
-      later = later || s == from;
-      if (later && f.has(s)) DIVCOLL_THROW_UNLESS(H5Ldelete(f.id(), s.c_str(), H5P_DEFAULT) >= 0, "cannot drop " << s);
-    }
-    // the earlier stages' provenance is kept under base_*; the new stages' is this binary's
-    if (f.has_attribute("git_commit")) f.write_string("base_git_commit", f.read_string("git_commit"));
-    if (f.has_attribute("start_time")) f.write_string("base_start_time", f.read_string("start_time"));
-    for (const char* a : {"end_time", "resumed", "config", "git_commit", "start_time", "divcoll_version"})
-      if (f.has_attribute(a)) H5Adelete(f.id(), a);
-    f.write_string("config", toml);
-    f.write_string("git_commit", git_commit());
-    f.write_string("divcoll_version", DIVCOLL_VERSION);
-    f.write_string("start_time", now_iso());
-    f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
+    io::run_file::derive(f, from, toml, now_iso(), fs::absolute(base).string() + " (stages before " + from + ")");
     f.close();
   }
   fs::remove(mpi::checkpoint_path(path));

@@ -236,9 +236,8 @@ void run_agents(Driver& driver, const AgentsDef& def, const AgentsSpec& spec) {
   const int64_t done = file.has(G) && file.group(G).has_attribute("generations_done")
                            ? file.group(G).read_int("generations_done")
                            : 0;
-  for (int g = static_cast<int>(done); g <= A.generations + 1; ++g)
-    if (file.has(gen_name(G, g))) H5Ldelete(file.id(), gen_name(G, g).c_str(), H5P_DEFAULT);
-  if (file.has(G + "/final") && done < A.generations + 1) H5Ldelete(file.id(), (G + "/final").c_str(), H5P_DEFAULT);
+  for (int g = static_cast<int>(done); g <= A.generations + 1; ++g) file.remove(gen_name(G, g));
+  if (done < A.generations + 1) file.remove(G + "/final");
   // the master's population: the survivors of the last committed generation
   // (read on every rank: a read made by one rank alone unbalances the ranks' HDF5 metadata caches, io/h5.hpp)
   std::vector<evo::Individual> population;
