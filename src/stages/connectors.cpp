@@ -17,7 +17,6 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <numeric>
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
@@ -27,6 +26,7 @@
 #include "io/run_read.hpp"
 #include "morph/body.hpp"
 #include "stages/payload.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {
@@ -437,33 +437,6 @@ std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vec
   driver.drive(*plan);
   // every rank gets the trained weights
   return broadcast(driver, driver.master() ? plan->weights() : std::vector<std::vector<double>>{});
-}
-
-std::vector<morph::Agent> load_population(const sim::RunPhysics& physics, const io::h5::Node& file,
-                                          const std::string& group) {
-  // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
-  // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
-  const std::string at = io::anchors_path(group);
-  const bool stored = file.has(at);
-  // every rank reads (a read made by one rank alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp)
-  std::vector<morph::Agent> agents;
-  for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
-  if (stored) io::read_anchors(file, at, agents);
-  // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
-  if (!stored)
-    for (auto& a : agents) a.anchors = collective::compute_anchors(a, physics);
-  return agents;
-}
-
-void store_anchors(Driver& driver, const std::string& group, const std::vector<morph::Agent>& agents) {
-  const io::h5::File& file = driver.file();
-  const std::string at = io::anchors_path(group);
-  if (file.has(at)) return;
-  std::vector<int64_t> rows(agents.size());
-  std::iota(rows.begin(), rows.end(), 0);
-  if (!driver.master()) rows.clear();
-  file.write_rows<int32_t>(at, {static_cast<hsize_t>(agents.size()), 4}, rows,
-                           driver.master() ? io::anchors_rows(agents) : std::vector<int32_t>{});
 }
 
 void run_connectors_stage(Driver& driver) {

@@ -9,9 +9,9 @@
 #include "collective/pairs.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
-#include "stages/connectors.hpp"
 #include "stages/driver.hpp"
 #include "stages/payload.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {
