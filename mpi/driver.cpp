@@ -150,196 +150,265 @@ DriverClock& driver_clock() {
   return clock;
 }
 
-void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
-           const std::function<void()>& checkpoint) {
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const Plan::Info info = plan.info();
-  const std::string& label = info.label;
-  if (!file.has(info.group)) file.create_group(info.group);
-  io::h5::Node group = file.group(info.group);
-  for (const Attribute& a : plan.attributes()) write_attribute(file, info.group, a.name, a.value);
-  write_records(comm, file, rank == 0 ? plan.setup() : Records{});
-  const int R = plan.rounds(), passes = info.passes;
-  DIVCOLL_DEMAND(passes >= 1);
-  const int done = group.has_attribute(info.counter) ? static_cast<int>(group.read_int(info.counter)) : 0;
+namespace {
 
-  // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
-  // alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp); the master's plan holds it
-  StoredState stored;
-  if (done > 0) {
-    for (const std::string& p : plan.state_paths()) stored[p] = file.read<double>(p);
-    for (const auto& [name, value] : plan.state_attributes()) {
-      const auto [g, a] = attribute_at(info.group, name);
-      if (file.has(g) && file.group(g).has_attribute(a))
-        stored[name] = {static_cast<double>(file.group(g).read_int(a))};
-    }
+// one drive() of a plan: its start or resume, its farms of rounds, the rows waiting for a copy, the commits and the
+// progress lines
+class PlanDrive {
+ public:
+  PlanDrive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+            const std::function<void()>& checkpoint)
+      : comm_(comm), cfg_(cfg), file_(file), plan_(plan), checkpoint_(checkpoint), info_(plan.info()),
+        passes_(info_.passes) {
+    MPI_Comm_rank(comm, &rank_);
+    MPI_Comm_size(comm, &size_);
   }
-  if (rank == 0) {
-    plan.start(done, stored);
-    if (done >= R)
-      std::printf("%s: all %d %ss were already done\n", label.c_str(), R, info.round_word.c_str());
-    else if (done > 0)
-      std::printf("%s: resuming after %s %d\n", label.c_str(), info.round_word.c_str(), done);
+  void run();
+
+ private:
+  int start();
+  void flush();
+  void commit(int rounds_done);
+  // runs a flush or a commit (which may flush): the time writing rows counts as writes, the rest as commits
+  template <class F>
+  void timed(const F& f) {
+    const auto tc = std::chrono::steady_clock::now();
+    records_s_ = 0;
+    f();
+    clock_.writes_s += records_s_;
+    clock_.commits_s += since(tc) - records_s_;
   }
+  // the items of rounds r .. r + m - 1 of a plan with independent rounds, farmed together; returns m
+  int gather_together(int r, std::vector<std::string>& items, std::vector<int64_t>& first, std::vector<double>& costs,
+                      bool& costed);
+  // farms round r (each pass), or rounds r .. r + m - 1 together; returns the items farmed
+  size_t farm_rounds(int r, int& m);
+  // the master: each round's end, with what it warns of on standard error (a plan prints nothing itself)
+  void end_round(int step);
+  void print_rounds(int r, int m, size_t n_items, std::chrono::steady_clock::time_point t0) const;
+
+  MPI_Comm comm_;
+  const io::RunConfig& cfg_;
+  io::h5::File& file_;
+  Plan& plan_;
+  const std::function<void()>& checkpoint_;
+  const Plan::Info info_;
+  const int passes_;
+  int R_ = 0;  // the plan's counted rounds (asked once its setup is written)
+  int rank_ = 0, size_ = 1;
   // A round's rows and the state of its commit wait on the master until a commit copies the run file to its
   // checkpoint (or the drive ends): --resume only ever starts from a copy, so rows and state written between
   // copies were never used, and writing them every round made the workers wait for each write. Rows of one
   // dataset from many rounds then go out in one write. With output.checkpoint_interval_s = 0 every commit
   // copies, and every round is written at its commit as before.
-  RecordQueue deferred;
-  int pending_done = -1;  // the rounds done of the commit not yet written, -1: none
-  double records_s = 0;   // time in flush() writing rows (reset by `timed` below)
-  auto flush = [&] {
-    const auto tr = std::chrono::steady_clock::now();
-    write_records(comm, file, rank == 0 ? deferred.take() : Records{});
-    records_s += since(tr);
-    const int done_now = broadcast(comm, pending_done);
-    if (done_now < 0) return;
-    write_records(comm, file, rank == 0 ? plan.state() : Records{});
-    using Counts = std::vector<std::pair<std::string, int64_t>>;
-    for (const auto& [name, value] : broadcast(comm, rank == 0 ? plan.state_attributes() : Counts{}))
-      write_attribute(file, info.group, name, value);
-    debug_exit_in_commit(comm, file, info.group, info.counter, done_now);
-    group.write_int(info.counter, done_now);
-    pending_done = -1;
-  };
-  // rank 0 asks for a copy (which writes what waits) once it holds more than this
-  constexpr size_t kDeferredMaxBytes = size_t{256} << 20;
-  DeferredWrites defer(flush, [&] { return deferred.bytes() > kDeferredMaxBytes; });
-  auto commit = [&](int rounds_done) {
-    pending_done = rounds_done;
-    // the debug exit sits between this commit's state and counter: they are written now, copy or not
-    if (debug_exit_wanted(info.group, info.counter, rounds_done)) flush();
-    checkpoint();
-  };
+  RecordQueue deferred_;
+  int pending_done_ = -1;  // the rounds done of the commit not yet written, -1: none
+  double records_s_ = 0;   // time in flush() writing rows (reset by timed())
+  DriverClock& clock_ = driver_clock();
+  std::chrono::steady_clock::time_point t_stage_;
+  double last_print_ = -1e9;
+};
 
-  DriverClock& clock = driver_clock();
-  // runs a flush or a commit (which may flush): the time writing rows counts as writes, the rest as commits
-  auto timed = [&](const auto& f) {
-    const auto tc = std::chrono::steady_clock::now();
-    records_s = 0;
-    f();
-    clock.writes_s += records_s;
-    clock.commits_s += since(tc) - records_s;
-  };
+// writes the plan's attributes and setup rows, reads the round counter and the state committed with it, and
+// starts the master's plan from them; returns the rounds done
+int PlanDrive::start() {
+  const std::string& label = info_.label;
+  if (!file_.has(info_.group)) file_.create_group(info_.group);
+  io::h5::Node group = file_.group(info_.group);
+  for (const Attribute& a : plan_.attributes()) write_attribute(file_, info_.group, a.name, a.value);
+  write_records(comm_, file_, rank_ == 0 ? plan_.setup() : Records{});
+  R_ = plan_.rounds();
+  DIVCOLL_DEMAND(passes_ >= 1);
+  const int done = group.has_attribute(info_.counter) ? static_cast<int>(group.read_int(info_.counter)) : 0;
 
-  const auto t_stage = std::chrono::steady_clock::now();
-  double last_print = -1e9;
-  const int end = R + (plan.closing_round() ? 1 : 0);
-  int size = 1;
-  MPI_Comm_size(comm, &size);
-  DIVCOLL_DEMAND(!info.independent_rounds || passes == 1);
-  for (int r = done; r < end;) {
-    // the closing round changes the plan's state: a commit still waiting is written with its own state first
-    if (r >= R) timed(flush);
-    const auto t0 = std::chrono::steady_clock::now();
-    // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
-    std::vector<std::string> items;
-    std::vector<int64_t> first = {0};  // where each step's items start in `items`
-    std::vector<double> costs;         // the plan's cost estimates of `items`, if it gave them for every step
-    bool costed = true;
-    auto add_costs = [&](int step, size_t count) {
-      std::vector<double> c = plan.item_costs(step);
-      DIVCOLL_DEMAND(c.empty() || c.size() == count);
+  // where to start: the state committed with the counter. Every rank reads it (a read made by one rank
+  // alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp); the master's plan holds it
+  StoredState stored;
+  if (done > 0) {
+    for (const std::string& p : plan_.state_paths()) stored[p] = file_.read<double>(p);
+    for (const auto& [name, value] : plan_.state_attributes()) {
+      const auto [g, a] = attribute_at(info_.group, name);
+      if (file_.has(g) && file_.group(g).has_attribute(a))
+        stored[name] = {static_cast<double>(file_.group(g).read_int(a))};
+    }
+  }
+  if (rank_ == 0) {
+    plan_.start(done, stored);
+    if (done >= R_)
+      std::printf("%s: all %d %ss were already done\n", label.c_str(), R_, info_.round_word.c_str());
+    else if (done > 0)
+      std::printf("%s: resuming after %s %d\n", label.c_str(), info_.round_word.c_str(), done);
+  }
+  return done;
+}
+
+void PlanDrive::flush() {
+  const auto tr = std::chrono::steady_clock::now();
+  write_records(comm_, file_, rank_ == 0 ? deferred_.take() : Records{});
+  records_s_ += since(tr);
+  const int done_now = broadcast(comm_, pending_done_);
+  if (done_now < 0) return;
+  write_records(comm_, file_, rank_ == 0 ? plan_.state() : Records{});
+  using Counts = std::vector<std::pair<std::string, int64_t>>;
+  for (const auto& [name, value] : broadcast(comm_, rank_ == 0 ? plan_.state_attributes() : Counts{}))
+    write_attribute(file_, info_.group, name, value);
+  debug_exit_in_commit(comm_, file_, info_.group, info_.counter, done_now);
+  file_.group(info_.group).write_int(info_.counter, done_now);
+  pending_done_ = -1;
+}
+
+void PlanDrive::commit(int rounds_done) {
+  pending_done_ = rounds_done;
+  // the debug exit sits between this commit's state and counter: they are written now, copy or not
+  if (debug_exit_wanted(info_.group, info_.counter, rounds_done)) flush();
+  checkpoint_();
+}
+
+int PlanDrive::gather_together(int r, std::vector<std::string>& items, std::vector<int64_t>& first,
+                               std::vector<double>& costs, bool& costed) {
+  int m = 0;
+  if (rank_ == 0)
+    do {
+      const std::string in = plan_.round_input(r + m);
+      DIVCOLL_DEMAND(in.empty());
+      plan_.take_input(r + m, in);
+      std::vector<std::string> more = plan_.items(r + m);
+      std::vector<double> c = plan_.item_costs(r + m);
+      DIVCOLL_DEMAND(c.empty() || c.size() == more.size());
       costed = costed && !c.empty();
       costs.insert(costs.end(), c.begin(), c.end());
-    };
-    int m = 0;
-    auto tp = std::chrono::steady_clock::now();
-    auto lap = [&](double& into) {
-      const auto now = std::chrono::steady_clock::now();
-      into += std::chrono::duration<double>(now - tp).count();
-      tp = now;
-    };
-    const bool together = info.independent_rounds && r < R;
-    if (together) {
-      if (rank == 0)
-        do {
-          const std::string in = plan.round_input(r + m);
-          DIVCOLL_DEMAND(in.empty());
-          plan.take_input(r + m, in);
-          std::vector<std::string> more = plan.items(r + m);
-          add_costs(r + m, more.size());
-          std::move(more.begin(), more.end(), std::back_inserter(items));
-          first.push_back(static_cast<int64_t>(items.size()));
-          ++m;
-        } while (r + m < R && items.size() < kTogetherItemsPerRank * static_cast<size_t>(size) &&
-                 !debug_exit_wanted(info.group, info.counter, r + m));  // the debug exit's commit stays one
-      m = broadcast(comm, m);
-      if (rank != 0)
-        for (int k = 0; k < m; ++k) plan.take_input(r + k, std::string());
-      lap(clock.items_s);
-    } else {
-      m = 1;
-    }
-    size_t n_items = 0;
-    for (int pass = 0; pass < passes; ++pass) {
-      const int step = r * passes + pass;
-      if (!together) {
-        plan.take_input(step, bcast_string(comm, rank == 0 ? plan.round_input(step) : std::string()));
-        lap(clock.input_s);
-        items = rank == 0 ? plan.items(step) : std::vector<std::string>{};
-        costs.clear(), costed = true;
-        if (rank == 0) add_costs(step, items.size());
-        first = {0, static_cast<int64_t>(items.size())};
-        lap(clock.items_s);
+      std::move(more.begin(), more.end(), std::back_inserter(items));
+      first.push_back(static_cast<int64_t>(items.size()));
+      ++m;
+    } while (r + m < R_ && items.size() < kTogetherItemsPerRank * static_cast<size_t>(size_) &&
+             !debug_exit_wanted(info_.group, info_.counter, r + m));  // the debug exit's commit stays one
+  m = broadcast(comm_, m);
+  if (rank_ != 0)
+    for (int k = 0; k < m; ++k) plan_.take_input(r + k, std::string());
+  return m;
+}
+
+void PlanDrive::end_round(int step) {
+  deferred_.add(plan_.end_round(step));
+  for (const std::string& w : plan_.take_warnings()) std::fprintf(stderr, "%s\n", w.c_str());
+}
+
+size_t PlanDrive::farm_rounds(int r, int& m) {
+  // the steps of this farm: one pass of round r, or rounds r .. r + m - 1 of a plan with independent rounds
+  std::vector<std::string> items;
+  std::vector<int64_t> first = {0};  // where each step's items start in `items`
+  std::vector<double> costs;         // the plan's cost estimates of `items`, if it gave them for every step
+  bool costed = true;
+  auto tp = std::chrono::steady_clock::now();
+  auto lap = [&](double& into) {
+    const auto now = std::chrono::steady_clock::now();
+    into += std::chrono::duration<double>(now - tp).count();
+    tp = now;
+  };
+  const bool together = info_.independent_rounds && r < R_;
+  m = 1;
+  if (together) {
+    m = gather_together(r, items, first, costs, costed);
+    lap(clock_.items_s);
+  }
+  size_t n_items = 0;
+  for (int pass = 0; pass < passes_; ++pass) {
+    const int step = r * passes_ + pass;
+    if (!together) {
+      plan_.take_input(step, bcast_string(comm_, rank_ == 0 ? plan_.round_input(step) : std::string()));
+      lap(clock_.input_s);
+      items = rank_ == 0 ? plan_.items(step) : std::vector<std::string>{};
+      costs.clear(), costed = true;
+      if (rank_ == 0) {
+        costs = plan_.item_costs(step);
+        DIVCOLL_DEMAND(costs.empty() || costs.size() == items.size());
+        costed = !costs.empty();
       }
-      n_items += items.size();
-      FarmOptions fo;
-      if (rank == 0 && costed) fo.costs = std::move(costs);  // the farm hands out the dearest first
-      size_t at = 0;  // the step of the latest result (results come in item order)
-      fo.on_result = [&](int64_t i, const std::string& bytes) {
-        while (i >= first[at + 1]) ++at;
-        plan.reduce(together ? r + static_cast<int>(at) : step, i - first[at], bytes);
-      };
-      fo.progress = [&](int k, int n) {
-        const double now = since(t_stage);
-        if (cfg.run.progress_every_s > 0 && now - last_print >= cfg.run.progress_every_s) {
-          last_print = now;
-          const std::string rounds = m > 1 ? std::to_string(r + 1) + "-" + std::to_string(r + m) : std::to_string(r + 1);
-          std::printf("%s: %s %s/%d, %d/%d %s, %.1f s\n", label.c_str(), info.round_word.c_str(), rounds.c_str(), R, k,
-                      n, info.item_word.c_str(), now);
-          std::fflush(stdout);
-        }
-      };
-      farm(comm, items, [&](const std::string& b) { return plan.compute(b); }, fo);
-      tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
-      if (rank == 0) {
-        if (together)
-          for (int k = 0; k < m; ++k) deferred.add(plan.end_round(r + k));
-        else
-          deferred.add(plan.end_round(step));
-      }
-      lap(clock.writes_s);
+      first = {0, static_cast<int64_t>(items.size())};
+      lap(clock_.items_s);
     }
-    clock.rounds += m;
-    if (r >= R) {  // the closing round: recorded, not counted
-      timed(flush);
+    n_items += items.size();
+    FarmOptions fo;
+    if (rank_ == 0 && costed) fo.costs = std::move(costs);  // the farm hands out the dearest first
+    size_t at = 0;  // the step of the latest result (results come in item order)
+    fo.on_result = [&](int64_t i, const std::string& bytes) {
+      while (i >= first[at + 1]) ++at;
+      plan_.reduce(together ? r + static_cast<int>(at) : step, i - first[at], bytes);
+    };
+    fo.progress = [&](int k, int n) {
+      const double now = since(t_stage_);
+      if (cfg_.run.progress_every_s > 0 && now - last_print_ >= cfg_.run.progress_every_s) {
+        last_print_ = now;
+        const std::string rounds = m > 1 ? std::to_string(r + 1) + "-" + std::to_string(r + m) : std::to_string(r + 1);
+        std::printf("%s: %s %s/%d, %d/%d %s, %.1f s\n", info_.label.c_str(), info_.round_word.c_str(), rounds.c_str(),
+                    R_, k, n, info_.item_word.c_str(), now);
+        std::fflush(stdout);
+      }
+    };
+    farm(comm_, items, [&](const std::string& b) { return plan_.compute(b); }, fo);
+    tp = std::chrono::steady_clock::now();  // farm() keeps its own time (FarmClock::farm_s)
+    if (rank_ == 0) {
+      if (together)
+        for (int k = 0; k < m; ++k) end_round(r + k);
+      else
+        end_round(step);
+    }
+    lap(clock_.writes_s);
+  }
+  return n_items;
+}
+
+void PlanDrive::print_rounds(int r, int m, size_t n_items, std::chrono::steady_clock::time_point t0) const {
+  if (rank_ != 0) return;
+  const double dt = since(t0), el = since(t_stage_);
+  for (int k = 0; k < m; ++k)
+    std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", info_.label.c_str(), info_.round_word.c_str(),
+                r + k + 1, R_, plan_.summary(r + k).c_str(), n_items / dt, info_.item_word.c_str(), el,
+                (R_ - r - m) * dt / m);
+  std::fflush(stdout);
+}
+
+void PlanDrive::run() {
+  const int done = start();
+  // rank 0 asks for a copy (which writes what waits) once it holds more than this
+  constexpr size_t kDeferredMaxBytes = size_t{256} << 20;
+  DeferredWrites defer([this] { flush(); }, [this] { return deferred_.bytes() > kDeferredMaxBytes; });
+  t_stage_ = std::chrono::steady_clock::now();
+  const int end = R_ + (plan_.closing_round() ? 1 : 0);
+  DIVCOLL_DEMAND(!info_.independent_rounds || passes_ == 1);
+  for (int r = done; r < end;) {
+    // the closing round changes the plan's state: a commit still waiting is written with its own state first
+    if (r >= R_) timed([this] { flush(); });
+    const auto t0 = std::chrono::steady_clock::now();
+    int m = 1;
+    const size_t n_items = farm_rounds(r, m);
+    clock_.rounds += m;
+    if (r >= R_) {  // the closing round: recorded, not counted
+      timed([this] { flush(); });
       ++r;
       continue;
     }
     // a commit after the last round of this farm if a commit point (every `every` rounds, the last round) lies
     // among its rounds: the state is the state after all of them
-    const int every = info.commit_every > 0 ? info.commit_every : cfg.output.checkpoint_every;
-    if ((r + m) / every > r / every || r + m == R) timed([&] { commit(r + m); });
-    if (rank == 0) {
-      const double dt = since(t0), el = since(t_stage);
-      for (int k = 0; k < m; ++k)
-        std::printf("%s: %s %d/%d: %s; %.0f %s/s, %.0f s, ETA %.0f s\n", label.c_str(), info.round_word.c_str(),
-                    r + k + 1, R, plan.summary(r + k).c_str(), n_items / dt, info.item_word.c_str(), el,
-                    (R - r - m) * dt / m);
-      std::fflush(stdout);
-    }
+    const int every = info_.commit_every > 0 ? info_.commit_every : cfg_.output.checkpoint_every;
+    if ((r + m) / every > r / every || r + m == R_) timed([&] { commit(r + m); });
+    print_rounds(r, m, n_items, t0);
     r += m;
   }
-  timed(flush);  // what still waits is written before the stage goes on (its later steps and stages read it)
-  write_records(comm, file, rank == 0 ? plan.finish() : Records{});
-  if (rank == 0) {
-    const std::string s = plan.finish_summary();
-    if (!s.empty()) std::printf("%s: %s\n", label.c_str(), s.c_str());
+  timed([this] { flush(); });  // what still waits is written before the stage goes on (its later steps and stages read it)
+  write_records(comm_, file_, rank_ == 0 ? plan_.finish() : Records{});
+  if (rank_ == 0) {
+    const std::string s = plan_.finish_summary();
+    if (!s.empty()) std::printf("%s: %s\n", info_.label.c_str(), s.c_str());
     std::fflush(stdout);
   }
+}
+
+}  // namespace
+
+void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+           const std::function<void()>& checkpoint) {
+  PlanDrive(comm, cfg, file, plan, checkpoint).run();
 }
 
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,

@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
@@ -133,14 +134,18 @@ class LockstepPlan : public ConnectorsPlan {
   // numerical trouble, reported with where: pairs whose episode ran (status ok) but whose gradient was not
   // finite are left out of the step (they count in nan_pairs; one of them would have made the slot's weights
   // NaN); with run.precision = "float_networks", pairs whose float gradient overflowed were run again in double
-  void report_bad_gradients(int it, int c, int n, int redone) const {
+  // (said by the driver: take_warnings)
+  void report_bad_gradients(int it, int c, int n, int redone) {
+    const std::string at = slots_[c].group + " column " + std::to_string(slots_[c].column) + ", iteration " +
+                           std::to_string(it + 1) + ": ";
     if (n > 0)
-      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) ran but their gradient was not finite; left out of "
-                   "the step (counted in nan_pairs)\n", slots_[c].group.c_str(), slots_[c].column, it + 1, n);
+      warnings_.push_back(at + std::to_string(n) + " pair(s) ran but their gradient was not finite; left out of the "
+                          "step (counted in nan_pairs)");
     if (redone > 0)
-      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) had a float gradient beyond float's range; "
-                   "run again with the networks in double\n", slots_[c].group.c_str(), slots_[c].column, it + 1, redone);
+      warnings_.push_back(at + std::to_string(redone) + " pair(s) had a float gradient beyond float's range; run "
+                          "again with the networks in double");
   }
+  std::vector<std::string> take_warnings() override { return std::exchange(warnings_, {}); }
   Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
     Records out = slot_row("curve_u", I_, it, cu);
     out += slot_row("curve_bl", I_, it, cb);
@@ -157,6 +162,7 @@ class LockstepPlan : public ConnectorsPlan {
   const std::string sg_;
   sim::Simulator sim_;
   std::vector<double> weights_;  // the round's weight vectors, Pc each (every rank)
+  std::vector<std::string> warnings_;  // of the last end_round
 };
 
 // the plain method: each slot's gradients summed in pair order, then one Adam (or normalized) step

@@ -70,7 +70,10 @@ SerialRun run_serial(Plan& plan, const SerialOptions& o, Plan* worker) {
       while (static_cast<int64_t>(i) >= first[at + 1]) ++at;
       plan.reduce(steps[at], static_cast<int64_t>(i) - first[at], results[i]);
     }
-    for (int step : steps) add(run.rounds, plan.end_round(step));
+    for (int step : steps) {
+      add(run.rounds, plan.end_round(step));
+      for (std::string& w : plan.take_warnings()) run.warnings.push_back(std::move(w));
+    }
   };
   auto costs_of = [&](int step, size_t count, std::vector<double>& costs, bool& costed) {
     std::vector<double> c = plan.item_costs(step);

@@ -3,9 +3,9 @@
 // plans through it (tests/stages/).
 //
 // Per round (per pass of one, with Plan::Info::passes > 1): round_input, take_input, items and item_costs, every
-// item's compute (in the order SerialOptions::order says), reduce in item order, end_round, summary. Rounds of a
-// plan with independent rounds may be farmed together as the driver does (SerialOptions::rounds_per_farm): the
-// items of every round of the farm first, then each round reduced and ended. The state is taken where the driver
+// item's compute (in the order SerialOptions::order says), reduce in item order, end_round and take_warnings,
+// summary. Rounds of a plan with independent rounds may be farmed together as the driver does
+// (SerialOptions::rounds_per_farm): the items of every round of the farm first, then each round reduced and ended. The state is taken where the driver
 // commits its last one: after the last counted round run, before the closing round.
 #pragma once
 
@@ -37,6 +37,7 @@ struct SerialRun {
   std::vector<std::pair<std::string, int64_t>> state_attributes;  // and its state attributes
   Records finish;                     // finish(), when the last round was run
   std::vector<std::string> summaries;  // summary() of every counted round run
+  std::vector<std::string> warnings;   // take_warnings() after every end_round(), in order
   std::string finish_summary;
   int done = 0;        // rounds done at the end
   int64_t items = 0;   // items computed
