@@ -56,41 +56,6 @@ struct MpiSession {
   ~MpiSession() { MPI_Finalize(); }
 };
 
-}  // namespace
-
-// the sections whose keys decide what a stage computes (beside run.seed, run.precision and run.contact, which every
-// stage uses)
-std::vector<std::string> sections_before(const std::string& stage) {
-  std::vector<std::string> out;
-  for (const std::string& s : io::stage_names()) {
-    if (s == stage) break;
-    out.push_back(s);
-  }
-  return out;
-}
-
-// --from: the keys of the stages before `from` (and run.seed, run.precision, run.contact; analysis.familiarity_on,
-// which the deploy stage reads, when deploy is before `from`) must be the base's; returns the
-// differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
-std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
-  const auto a = io::flat(base), b = io::flat(now);
-  const auto secs = sections_before(from);
-  std::string diff;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
-    // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
-    const bool deploy_reads = a[i].first == "analysis.familiarity_on" &&
-                              std::find(secs.begin(), secs.end(), "deploy") != secs.end();
-    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || a[i].first == "run.contact" ||
-                       deploy_reads ||
-                       std::find(secs.begin(), secs.end(), sec) != secs.end();
-    if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
-  }
-  return diff;
-}
-
-namespace {
-
 // rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
 void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
                      const std::string& toml) {
@@ -238,11 +203,11 @@ void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
     DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
     io::h5::File f = io::h5::File::open(args.base);
     const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
-    const std::string diff = incompatible_keys(before, cfg, args.from);
+    const std::string diff = io::incompatible_keys(before, cfg, args.from);
     if (!diff.empty())
       throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
                              << ", so their keys must be the same:" << diff);
-    for (const std::string& s : sections_before(args.from))
+    for (const std::string& s : io::sections_before(args.from))
       if (io::stage_enabled(cfg, s))
         DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
                              "--from " << args.from << ": stage " << s << " is not complete in " << args.base);

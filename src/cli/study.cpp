@@ -195,7 +195,7 @@ std::vector<PlannedRun> plan(const Study& s) {
           const bool need = std::find(mine.begin(), mine.end(), k) != mine.end();
           const bool have = std::find(theirs.begin(), theirs.end(), k) != theirs.end();
           if (need && !have) break;
-          if (!incompatible_keys(runs[j].cfg, r.cfg, k + 1 < S ? names[k + 1] : std::string()).empty()) break;
+          if (!io::incompatible_keys(runs[j].cfg, r.cfg, k + 1 < S ? names[k + 1] : std::string()).empty()) break;
           ++k;
         }
         if (k > best_k) best_k = k, r.base_run = j;
