@@ -328,7 +328,11 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     round_items += call.items.size();
     farm_call(comm, plan, schedule, call, progress);
     const auto tw = std::chrono::steady_clock::now();
-    if (rank == 0) writes.add(schedule.end(call));
+    if (rank == 0) {
+      writes.add(schedule.end(call));
+      // what the plan has to say about the rounds just ended (numerical trouble), on stderr: plans print nothing
+      for (const std::string& w : plan.take_warnings()) std::fprintf(stderr, "%s\n", w.c_str());
+    }
     clock.writes_s += since(tw);
     if (!call.ends_rounds) continue;
     clock.rounds += call.rounds;
@@ -348,6 +352,13 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
     if (!s.empty()) std::printf("%s: %s\n", info.label.c_str(), s.c_str());
     std::fflush(stdout);
   }
+}
+
+}  // namespace
+
+void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+           const std::function<void()>& checkpoint) {
+  PlanDrive(comm, cfg, file, plan, checkpoint).run();
 }
 
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,

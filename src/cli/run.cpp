@@ -7,33 +7,26 @@
 #include <cerrno>
 #include <cstring>
 
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <algorithm>
 #include <set>
 
-#include "collective/builders.hpp"
-#include "collective/pairs.hpp"
+#include "cli/commands.hpp"
 #include "common/check.hpp"
-#include "io/memory.hpp"
-#include "common/rng.hpp"
-#include "morph/body.hpp"
 #include "common/version.hpp"
 #include "config/config.hpp"
-#include "io/h5.hpp"
-#include "cli/commands.hpp"
 #include "io/file_lock.hpp"
-#include "config/pipeline.hpp"
-#include "io/run_read.hpp"
+#include "io/h5.hpp"
+#include "io/memory.hpp"
+#include "io/run_file.hpp"
 #include "mpi/agree.hpp"
 #include "mpi/checkpoint.hpp"
 #include "mpi/driver.hpp"
-#include "mpi/scheduler.hpp"
+#include "mpi/pipeline.hpp"
 #include "mpi/stop.hpp"
 #include "mpi/wait.hpp"
+#include "stages/needs.hpp"
 
 namespace divcoll::cli {
 namespace {
@@ -55,41 +48,6 @@ struct MpiSession {
   ~MpiSession() { MPI_Finalize(); }
 };
 
-}  // namespace
-
-// the sections whose keys decide what a stage computes (beside run.seed, run.precision and run.contact, which every
-// stage uses)
-std::vector<std::string> sections_before(const std::string& stage) {
-  std::vector<std::string> out;
-  for (const std::string& s : io::stage_names()) {
-    if (s == stage) break;
-    out.push_back(s);
-  }
-  return out;
-}
-
-// --from: the keys of the stages before `from` (and run.seed, run.precision, run.contact; analysis.familiarity_on,
-// which the deploy stage reads, when deploy is before `from`) must be the base's; returns the
-// differences. A study reuses a run's stages only where this is empty, so a precision variant computes every stage
-std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from) {
-  const auto a = io::flat(base), b = io::flat(now);
-  const auto secs = sections_before(from);
-  std::string diff;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
-    // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
-    const bool deploy_reads = a[i].first == "analysis.familiarity_on" &&
-                              std::find(secs.begin(), secs.end(), "deploy") != secs.end();
-    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || a[i].first == "run.contact" ||
-                       deploy_reads ||
-                       std::find(secs.begin(), secs.end(), sec) != secs.end();
-    if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
-  }
-  return diff;
-}
-
-namespace {
-
 // rank 0: copies `base` to `path` without the groups of `from` and the later stages, with the new config
 void derive_run_file(const std::string& base, const std::string& path, const std::string& from,
                      const std::string& toml) {
@@ -98,78 +56,11 @@ void derive_run_file(const std::string& base, const std::string& path, const std
   fs::copy_file(base, tmp, fs::copy_options::overwrite_existing);
   {
     io::h5::File f = io::h5::File::open(tmp, true);
-    bool later = false;
-    for (const std::string& s : io::stage_names()) {
-      later = later || s == from;
-      if (later && f.has(s)) DIVCOLL_THROW_UNLESS(H5Ldelete(f.id(), s.c_str(), H5P_DEFAULT) >= 0, "cannot drop " << s);
-    }
-    // the earlier stages' provenance is kept under base_*; the new stages' is this binary's
-    if (f.has_attribute("git_commit")) f.write_string("base_git_commit", f.read_string("git_commit"));
-    if (f.has_attribute("start_time")) f.write_string("base_start_time", f.read_string("start_time"));
-    for (const char* a : {"end_time", "resumed", "config", "git_commit", "start_time", "divcoll_version"})
-      if (f.has_attribute(a)) H5Adelete(f.id(), a);
-    f.write_string("config", toml);
-    f.write_string("git_commit", git_commit());
-    f.write_string("divcoll_version", DIVCOLL_VERSION);
-    f.write_string("start_time", now_iso());
-    f.write_string("derived_from", fs::absolute(base).string() + " (stages before " + from + ")");
+    io::run_file::derive(f, from, toml, now_iso(), fs::absolute(base).string() + " (stages before " + from + ")");
     f.close();
   }
   fs::remove(mpi::checkpoint_path(path));
   fs::rename(tmp, path);
-}
-
-// rank 0: refuses a stage that would run without its inputs. `existing`: the run file being continued
-// ("" for a new one); with --from, the base's stages before --from count as present.
-void check_stage_inputs(const io::RunConfig& cfg, const RunArgs& args, const std::string& existing) {
-  std::set<std::string> present;
-  auto note_complete = [&](const std::string& file, const std::string& before) {
-    io::h5::File f = io::h5::File::open(file);
-    for (const std::string& s : io::stage_names()) {
-      if (s == before) break;
-      if (mpi::complete(f, s)) present.insert(s);
-    }
-  };
-  if (!existing.empty()) note_complete(existing, "");
-  if (!args.from.empty()) note_complete(args.base, args.from);
-  // stored values that the stages to run read, where no NaN or Inf may be (a finished stage's weights
-  // and bodies; a running stage's checkpointed optimizer state)
-  const std::string source = !existing.empty() ? existing : args.base;
-  if (!source.empty()) {
-    io::h5::File f = io::h5::File::open(source);
-    std::vector<std::string> finite;
-    if (present.count("agents"))
-      for (const char* d : {"params", "rest_pos", "rest_length", "amplitude"}) finite.push_back(std::string("agents/final/") + d);
-    if (present.count("connectors"))
-      for (const std::string& kind : cfg.connectors.kinds) finite.push_back("connectors/" + kind + "/params");
-    if (!existing.empty() && io::stage_enabled(cfg, "connectors") && !present.count("connectors"))
-      for (const char* d : {"params", "adam_m", "adam_v"}) finite.push_back(std::string("connectors/state/") + d);
-    for (const std::string& d : finite) {
-      if (!f.has(d)) continue;
-      const std::vector<double> v = f.read<double>(d);
-      size_t bad = 0, first = 0;
-      for (size_t i = v.size(); i-- > 0;)
-        if (!std::isfinite(v[i])) ++bad, first = i;
-      if (bad > 0)
-        throw InputError(msg() << source << ": " << d << " holds " << bad << " non-finite value(s) (the first at flat index "
-                               << first << ") where none may be; the stored stage is damaged: rerun it into a new "
-                               << "file (--from, or a new run) instead of continuing this one");
-    }
-  }
-  const std::string where = !existing.empty() ? existing : !args.from.empty() ? args.base : std::string();
-  for (const io::StageInfo& s : io::kStageTable) {
-    const std::string stage(s.name);
-    const bool runs = args.agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);
-    if (!runs || present.count(stage)) continue;
-    for (const std::string& need : io::split(std::string(s.reads))) {
-      if (present.count(need) || (!args.agents_only && io::stage_enabled(cfg, need))) continue;
-      throw InputError(msg() << "stage " << stage << " reads the results of stage " << need << ", but " << need
-                             << " is neither in run.stages nor complete in "
-                             << (where.empty() ? "a new run file" : where)
-                             << ": add it to run.stages, or continue a run file that has it (--resume, or --from "
-                             << stage << " --base OLD.h5)");
-    }
-  }
 }
 
 // the tape of the longest episode with gradients of the stages that run: every rank's simulator holds
@@ -181,36 +72,11 @@ void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) 
   MPI_Comm_size(node, &per_node);
   MPI_Comm_free(&node);
   mpi::agree_rank0(comm, [&] {
-    Rng rng = make_rng(cfg.run.seed, 0, 0);
-    morph::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
-    const sim::RunPhysics physics = io::run_physics(cfg);
-    sim::RunOptions opt = physics.options();
-    opt.grad = true;
-    uint64_t need = 0;
-    std::string what;
-    auto consider = [&](const sim::Scene& s, int steps, const std::string& key) {
-      opt.steps = steps;
-      const uint64_t n = episode_bytes(s, opt);
-      if (n > need) need = n, what = key + " = " + std::to_string(steps) + ", " + std::to_string(sim::substeps_needed(s)) + " substep(s) per step";
-    };
-    const bool run = !args.agents_only;
-    if (args.agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
-      consider(collective::agent_scene(a, "flat", physics.contact), cfg.agents.episode_steps, "agents.episode_steps");
-    if (run && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") || io::stage_enabled(cfg, "graded"))) {
-      a.anchors = collective::compute_anchors(a, physics);
-      b.anchors = collective::compute_anchors(b, physics);
-      const std::vector<double> w = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
-      double k = cfg.connectors.weak_stiffness;
-      for (const std::string& kind : cfg.connectors.kinds)
-        if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg.connectors, kind));
-      std::vector<std::string> envs = {"flat"};
-      if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
-      for (const std::string& env : envs) consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env, physics.contact), cfg.connectors.episode_steps, "connectors.episode_steps");
-    }
+    const stages::Tape need = stages::largest_tape(cfg, args.agents_only);
     const uint64_t limit = memory_limit_bytes(cfg.run.memory_limit_gb) / static_cast<uint64_t>(per_node);
-    if (need > limit)
-      throw InputError(msg() << "each rank's episodes with gradients need about " << gb_text(need) << " of memory ("
-                             << what << "), more than its share of the limit: " << gb_text(limit) << " = "
+    if (need.bytes > limit)
+      throw InputError(msg() << "each rank's episodes with gradients need about " << gb_text(need.bytes) << " of memory ("
+                             << need.what << "), more than its share of the limit: " << gb_text(limit) << " = "
                              << (cfg.run.memory_limit_gb > 0 ? "run.memory_limit_gb" : "80% of MemAvailable")
                              << " / " << per_node << " rank(s) on this node. Shorten the episodes, run fewer ranks "
                              << "per node, or raise run.memory_limit_gb");
@@ -251,11 +117,11 @@ void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
     DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
     io::h5::File f = io::h5::File::open(args.base);
     const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
-    const std::string diff = incompatible_keys(before, cfg, args.from);
+    const std::string diff = io::incompatible_keys(before, cfg, args.from);
     if (!diff.empty())
       throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
                              << ", so their keys must be the same:" << diff);
-    for (const std::string& s : sections_before(args.from))
+    for (const std::string& s : io::sections_before(args.from))
       if (io::stage_enabled(cfg, s))
         DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
                              "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
@@ -336,7 +202,7 @@ void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
   check_memory(MPI_COMM_WORLD, p.cfg, args);
   // every stage that will run finds its inputs: in a stage that runs before it, or complete in the file
   mpi::agree_rank0(MPI_COMM_WORLD, [&] {
-    check_stage_inputs(p.cfg, args, p.existing ? p.path : std::string());
+    stages::check_inputs(p.cfg, args.agents_only, p.existing ? p.path : std::string(), args.from, args.base);
   });
   if (!args.from.empty()) {
     // a copy of the base's earlier stages is made now and continued like a resumed run
@@ -377,87 +243,6 @@ void create_run_file(const std::string& path, const io::RunConfig& cfg, const st
     fs::rename(tmp, path);
   }
   mpi::barrier_sleeping(MPI_COMM_WORLD);
-}
-
-// a finished stage's timings, as attributes of its group (every rank writes) and, on rank 0, as text: its wall time,
-// how busy each rank was (seconds computing items) and the CPU seconds of its computing and serving threads,
-// gathered on every rank, and rank 0's time outside the farm
-void record_stage_times(io::h5::File& file, const std::string& name, double wall, const mpi::FarmClock& before,
-                        const mpi::DriverClock& dbefore, int rank, int size) {
-  const mpi::FarmClock& fc = mpi::farm_clock();
-  double mine[3] = {fc.compute_s - before.compute_s, fc.compute_cpu_s - before.compute_cpu_s,
-                    fc.serve_cpu_s - before.serve_cpu_s};
-  std::vector<double> all(3 * static_cast<size_t>(size));
-  MPI_Allgather(mine, 3, MPI_DOUBLE, all.data(), 3, MPI_DOUBLE, MPI_COMM_WORLD);
-  auto per_rank = [&](int k) {  // "r0,r1,..." of column k
-    std::string text;
-    for (int r = 0; r < size; ++r) {
-      char tmp[32];
-      std::snprintf(tmp, sizeof tmp, "%s%.3f", r == 0 ? "" : ",", all[3 * static_cast<size_t>(r) + k]);
-      text += tmp;
-    }
-    return text;
-  };
-  double busy_sum = 0, busy_max = 0, cpu_sum = 0, serve_sum = 0;
-  for (int r = 0; r < size; ++r) {
-    const double* c = &all[3 * static_cast<size_t>(r)];
-    busy_sum += c[0], busy_max = std::max(busy_max, c[0]), cpu_sum += c[1], serve_sum += c[2];
-  }
-  io::h5::Node g = file.group(name);
-  g.write_double("wall_s_last_session", wall);
-  g.write_double("wall_s", (g.has_attribute("wall_s") ? g.read_double("wall_s") : 0.0) + wall);
-  // timings are attributes: `divcoll compare` (and the determinism tests) compare datasets only
-  g.write_string("busy_s_per_rank_last_session", per_rank(0));
-  // CPU seconds of each rank's computing thread inside compute() (below busy: it was descheduled) and of
-  // its serving thread inside the farm (0 at one rank)
-  g.write_string("compute_cpu_s_per_rank_last_session", per_rank(1));
-  g.write_string("serve_cpu_s_per_rank_last_session", per_rank(2));
-  // rank 0's time outside the farm, while the workers wait for it (the serial part of the stage)
-  const mpi::DriverClock& dc = mpi::driver_clock();
-  double serial[4] = {dc.input_s - dbefore.input_s, dc.items_s - dbefore.items_s,
-                      dc.writes_s - dbefore.writes_s, dc.commits_s - dbefore.commits_s};
-  MPI_Bcast(serial, 4, MPI_DOUBLE, 0, MPI_COMM_WORLD);  // every rank writes rank 0's figures
-  char serial_text[160];
-  std::snprintf(serial_text, sizeof serial_text, "input=%.3f,items=%.3f,writes=%.3f,commits=%.3f", serial[0],
-                serial[1], serial[2], serial[3]);
-  g.write_string("master_serial_s_last_session", serial_text);
-  if (rank == 0) {  // run_with_status has marked the stage complete
-    std::printf("stage %s: done in %.1f s; ranks busy %.0f%% of it (master %.0f%%), load imbalance max/mean %.2f\n",
-                name.c_str(), wall, 100 * busy_sum / (size * wall), 100 * all[0] / wall,
-                busy_sum > 0 ? busy_max / (busy_sum / size) : 1.0);
-    std::printf("stage %s: master outside the farm %.1f s over %ld rounds (input %.2f, items %.2f, writes %.2f, "
-                "commits %.2f s)\n",
-                name.c_str(), serial[0] + serial[1] + serial[2] + serial[3], dc.rounds - dbefore.rounds,
-                serial[0], serial[1], serial[2], serial[3]);
-    if (size > 1 && busy_sum > 0 && wall > 0)
-      std::printf("stage %s: computing threads on a core %.1f%% of their busy time; serving threads %.2f%% of a "
-                  "core each\n",
-                  name.c_str(), 100 * cpu_sum / busy_sum, 100 * serve_sum / (size * wall));
-  }
-}
-
-// every stage of the run (`evolve`: the agents stage) that is not complete in the file, in run order, each with
-// its timings; a stop asked for by a signal leaves by mpi::StopRequested right after a checkpoint
-void run_stages(const RunArgs& args, const io::RunConfig& cfg, io::h5::File& file, mpi::Checkpointer& checkpoints,
-                int rank, int size) {
-  // the stages call ckpt at each commit; it copies the run file to its checkpoint when
-  // output.checkpoint_interval_s has passed or a stop was asked for, and the end of a stage copies always
-  auto ckpt = [&] { checkpoints.commit(); };
-  for (const mpi::Stage& stage : mpi::kStages) {
-    const std::string name(stage.info.name);
-    if (args.agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
-    if (mpi::complete(file, name)) {
-      if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
-      continue;
-    }
-    const auto t1 = std::chrono::steady_clock::now();
-    const mpi::FarmClock before = mpi::farm_clock();
-    const mpi::DriverClock dbefore = mpi::driver_clock();
-    // a finished stage is never redone on --resume: its end is a forced checkpoint
-    mpi::run_with_status(file, name, [&] { checkpoints.force(); }, [&] { stage.run(MPI_COMM_WORLD, cfg, file, ckpt); });
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    record_stage_times(file, name, wall, before, dbefore, rank, size);
-  }
 }
 
 }  // namespace
@@ -507,7 +292,7 @@ int run_session(const RunArgs& args) {
       // the first checkpoint of a new run: a stop asked for before it (the handlers are armed before the lock)
       // takes effect here
       if (!p.existing) checkpoints.force();
-      run_stages(args, cfg, file, checkpoints, rank, size);
+      mpi::run_stages(MPI_COMM_WORLD, cfg, file, checkpoints, args.agents_only);
     } catch (const mpi::StopRequested& stop) {
       // every rank is here, right after the same checkpoint: the file is closed normally
       mpi::disarm_stop_signals();

@@ -26,10 +26,4 @@ int run_main(int argc, char** argv, const RunArgs& args);
 // the same inside an MPI session that is already open (MPI_COMM_WORLD; `divcoll study` runs many)
 int run_session(const RunArgs& args);
 
-// the sections of the stages before `stage` (their keys decide what those stages computed)
-std::vector<std::string> sections_before(const std::string& stage);
-// --from: the keys of the stages before `from` (and run.seed) that differ between two configs,
-// as " key (old -> new)" items; empty when `from` can reuse `base`'s earlier stages
-std::string incompatible_keys(const io::RunConfig& base, const io::RunConfig& now, const std::string& from);
-
 }  // namespace divcoll::cli

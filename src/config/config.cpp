@@ -17,6 +17,8 @@
 #include "common/check.hpp"
 #include "config/environments.hpp"
 #include "config/pipeline.hpp"
+#include "config/toml_doc.hpp"
+#include "config/toml_parse.hpp"
 
 namespace divcoll::io {
 namespace {
@@ -849,12 +851,7 @@ RunConfig default_config() {
 
 RunConfig parse_config(const std::string& toml_text, const std::string& origin,
                        const std::vector<std::string>& overrides) {
-  toml::table root;
-  try {
-    root = toml::parse(toml_text, origin);
-  } catch (const toml::parse_error& e) {
-    throw InputError(msg() << origin << ": " << e.description() << " at line " << e.source().begin.line);
-  }
+  toml::table root = parse_toml_table(toml_text, origin);
   const std::vector<std::string> secs = sections();
 
   // overrides replace (or add) values in the parsed document, so they get the checks below
@@ -921,8 +918,8 @@ RunConfig load_config(const std::string& path, const std::vector<std::string>& o
   // a file that sets nothing would silently start the paper-scale run (every key at its paper value)
   bool empty = false;
   try {
-    empty = toml::parse(ss.str(), path).empty();
-  } catch (const toml::parse_error&) {
+    empty = parse_toml_table(ss.str(), path).empty();
+  } catch (const TomlSyntaxError&) {
     // parse_config reports it with the line
   }
   DIVCOLL_THROW_UNLESS(!empty, path << " sets no key, so every key would take its paper-scale default (hours on "
@@ -956,6 +953,30 @@ const std::vector<std::string>& stage_names() { return kStages; }
 bool stage_enabled(const RunConfig& cfg, const std::string& stage) {
   if (stage == "graded" && !cfg.graded.enabled) return false;
   return listed(cfg.run.stages, stage);
+}
+
+std::vector<std::string> sections_before(const std::string& stage) {
+  std::vector<std::string> out;
+  for (const std::string& s : stage_names()) {
+    if (s == stage) break;
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::string incompatible_keys(const RunConfig& base, const RunConfig& now, const std::string& from) {
+  const auto a = flat(base), b = flat(now);
+  const auto secs = sections_before(from);
+  std::string diff;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string sec = a[i].first.substr(0, a[i].first.find('.'));
+    // analysis.familiarity_on = inputs has the deploy stage store the connectors' inputs too: bound with [deploy]
+    const bool deploy_reads = a[i].first == "analysis.familiarity_on" && listed(secs, "deploy");
+    const bool bound = a[i].first == "run.seed" || a[i].first == "run.precision" || a[i].first == "run.contact" ||
+                       deploy_reads || listed(secs, sec);
+    if (bound && a[i].second != b[i].second) diff += " " + a[i].first + " (" + a[i].second + " -> " + b[i].second + ")";
+  }
+  return diff;
 }
 
 namespace {

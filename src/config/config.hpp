@@ -161,6 +161,14 @@ void validate(const RunConfig& cfg);
 bool stage_enabled(const RunConfig& cfg, const std::string& stage);
 // the pipeline's stages in the order they run: agents connectors deploy specialists scaling graded analysis
 const std::vector<std::string>& stage_names();
+// the sections whose keys decide what the stages before `stage` computed (beside run.seed, run.precision and
+// run.contact, which every stage uses)
+std::vector<std::string> sections_before(const std::string& stage);
+// the keys that decide what the stages before `from` computed (those sections, run.seed, run.precision,
+// run.contact, and analysis.familiarity_on, which the deploy stage reads, when deploy is before `from`) that differ
+// between two configs, as " key (old -> new)" items. Empty: a run of `now` may start at `from` on a copy of a run of
+// `base` (divcoll run --from; a study reuses a run's stages only then, so a precision variant computes every stage)
+std::string incompatible_keys(const RunConfig& base, const RunConfig& now, const std::string& from);
 
 // the fully resolved config as TOML, every key with its doc as a comment; parses back to `cfg`
 std::string to_toml(const RunConfig& cfg);

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <set>
-#include <toml++/toml.h>
 
 #include "common/check.hpp"
+#include "config/toml_parse.hpp"
 
 namespace divcoll::io {
 namespace {
@@ -68,12 +68,7 @@ void read_table(const toml::table& t, const std::string& where, sim::Environment
 }  // namespace
 
 std::vector<EnvironmentTable> parse_environments(const std::string& text, const std::string& origin) {
-  toml::table root;
-  try {
-    root = toml::parse(text, origin);
-  } catch (const toml::parse_error& e) {
-    throw InputError(msg() << origin << ": " << e.description() << " at line " << e.source().begin.line);
-  }
+  toml::table root = parse_toml_table(text, origin);
   sim::Environment defaults;
   std::vector<sim::Segment> default_rel;
   if (auto* d = root["defaults"].as_table()) read_table(*d, origin + ": [defaults]", defaults, default_rel);

@@ -100,6 +100,24 @@ WriterLock& WriterLock::operator=(WriterLock&& o) noexcept {
   return *this;
 }
 
+bool WriterLock::held_by_someone(const std::string& target, std::string* holder) {
+  const std::string lp = lock_path(target);
+  const int fd = ::open(lp.c_str(), O_RDONLY);
+  if (fd < 0) return false;
+  struct flock fl {};
+  fl.l_type = F_WRLCK;
+  fl.l_whence = SEEK_SET;
+  fl.l_start = 0;
+  fl.l_len = 1;
+  const bool held = fcntl(fd, F_GETLK, &fl) == 0 && fl.l_type != F_UNLCK;
+  char b[256] = {0};
+  const ssize_t n = ::read(fd, b, sizeof b - 1);
+  ::close(fd);
+  if (holder) *holder = n > 0 ? std::string(b, static_cast<size_t>(n)) : std::string();
+  if (holder && !holder->empty() && holder->back() == '\n') holder->pop_back();
+  return held;
+}
+
 WriterLock WriterLock::acquire(const std::string& target, int ranks, std::string* note) {
   const std::string lp = lock_path(target);
   for (int attempt = 0; attempt < 8; ++attempt) {

@@ -37,6 +37,9 @@ class WriterLock {
   bool held() const { return fd_ >= 0; }
 
   static std::string lock_path(const std::string& target) { return target + ".lock"; }
+  // whether a live process holds the job's lock of `target` (byte 0 of its lock file), read only; `holder`, if
+  // given, gets the lock file's text (who took it)
+  static bool held_by_someone(const std::string& target, std::string* holder = nullptr);
 
  private:
   int fd_ = -1;

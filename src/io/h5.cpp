@@ -292,6 +292,20 @@ Node Node::create_group(const std::string& path) const {
   return Node(std::move(g), file_, absolute(path_of(path)));
 }
 
+bool Node::remove(const std::string& path) const {
+  note("remove", path);
+  if (!has(path)) return false;
+  if (H5Ldelete(id(), path.c_str(), H5P_DEFAULT) < 0) fail(where(path), "cannot remove it");
+  return true;
+}
+
+bool Node::remove_attribute(const std::string& attr) const {
+  note("remove_attribute", attr);
+  if (!has_attribute(attr)) return false;
+  if (H5Adelete(id(), attr.c_str()) < 0) fail(file_, "cannot remove " + attr_label(name_, attr));
+  return true;
+}
+
 // ---- Node: attributes --------------------------------------------------------------------------
 
 namespace {

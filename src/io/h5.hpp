@@ -101,6 +101,12 @@ class Node {
   // groups (create makes missing intermediate groups too)
   Node group(const std::string& path) const;
   Node create_group(const std::string& path) const;
+  // unlinks the group or dataset `path` if there is one (true: there was); the file keeps its space. The one
+  // place where a file's objects are dropped: a stage redone on a copy (--from), a generation written after the
+  // last commit. With MPI-IO every rank calls it
+  bool remove(const std::string& path) const;
+  // removes attribute `attr` if there is one (true: there was)
+  bool remove_attribute(const std::string& attr) const;
 
   // scalar attributes on this object; writing replaces an existing attribute of the same name
   void write_double(const std::string& attr, double v) const;

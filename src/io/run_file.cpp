@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "common/check.hpp"
+#include "common/version.hpp"
+#include "config/config.hpp"
 #include "sim/scene.hpp"
 
 namespace divcoll::io::run_file {
@@ -601,6 +603,25 @@ std::string markdown() {
     }
   }
   return out;
+}
+
+void derive(const h5::Node& root, const std::string& from, const std::string& config_toml,
+            const std::string& start_time, const std::string& derived_from) {
+  bool later = false;
+  for (const std::string& s : stage_names()) {
+    later = later || s == from;
+    if (later) root.remove(s);
+  }
+  // the earlier stages' provenance is kept under base_*; the new stages' is this binary's
+  if (root.has_attribute("git_commit")) root.write_string("base_git_commit", root.read_string("git_commit"));
+  if (root.has_attribute("start_time")) root.write_string("base_start_time", root.read_string("start_time"));
+  for (const char* a : {"end_time", "resumed", "config", "git_commit", "start_time", "divcoll_version"})
+    root.remove_attribute(a);
+  root.write_string("config", config_toml);
+  root.write_string("git_commit", git_commit());
+  root.write_string("divcoll_version", DIVCOLL_VERSION);
+  root.write_string("start_time", start_time);
+  root.write_string("derived_from", derived_from);
 }
 
 }  // namespace divcoll::io::run_file

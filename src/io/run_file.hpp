@@ -102,4 +102,11 @@ std::vector<std::string> check(const h5::File& f, bool every_row = false);
 // mpi/README.md's run-file tables: the axes, then every group and dataset
 std::string markdown();
 
+// a copy of a run file turned into the start of a new run that computes stage `from` and the later ones
+// (divcoll run --from): their groups dropped, the earlier stages' provenance kept as base_git_commit and
+// base_start_time, the run's end and resume counts gone, and the new run's config, provenance (this binary,
+// `start_time`) and `derived_from` written
+void derive(const h5::Node& root, const std::string& from, const std::string& config_toml,
+            const std::string& start_time, const std::string& derived_from);
+
 }  // namespace divcoll::io::run_file

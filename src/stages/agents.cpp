@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
+#include <utility>
 
 #include "collective/builders.hpp"
 #include "common/check.hpp"
@@ -150,9 +152,9 @@ class AgentsPlan final : public Plan {
     std::vector<evo::Individual> pool = g == 0 ? std::vector<evo::Individual>{} : population_;
     for (const auto& x : trained_)  // numerical trouble, said where it happened (its training stopped there)
       if (x.train.nonfinite_gradient_epoch >= 0)
-        std::fprintf(stderr, "%s: generation %d: agent %lld: gradient not finite at epoch %d of %d; its training stopped there\n",
-                     spec_.label.c_str(), g, static_cast<long long>(x.id), x.train.nonfinite_gradient_epoch,
-                     A_.epochs);
+        warnings_.push_back(spec_.label + ": generation " + std::to_string(g) + ": agent " + std::to_string(x.id) +
+                            ": gradient not finite at epoch " + std::to_string(x.train.nonfinite_gradient_epoch) +
+                            " of " + std::to_string(A_.epochs) + "; its training stopped there");
     for (auto& x : trained_) pool.push_back(std::move(x));
     // training times beside the pool (a parent's unknown after a resume: 0)
     std::vector<double> pool_s(pool.size() - trained_s_.size(), 0.0);
@@ -170,6 +172,7 @@ class AgentsPlan final : public Plan {
     population_ = std::move(next);
     return out;
   }
+  std::vector<std::string> take_warnings() override { return std::exchange(warnings_, {}); }
   std::string summary(int) const override {
     double best = -std::numeric_limits<double>::infinity(), mean = 0;
     int n = 0, failed = 0;
@@ -207,6 +210,7 @@ class AgentsPlan final : public Plan {
   std::vector<evo::Individual> trained_;     // the round's new agents, in item order
   std::vector<double> trained_s_;            // their training times (s)
   std::vector<double> parent_s_;             // the survivors' training times (s), when known
+  std::vector<std::string> warnings_;        // of the last end_round
   sim::Simulator sim_;
 };
 
@@ -236,9 +240,8 @@ void run_agents(Driver& driver, const AgentsDef& def, const AgentsSpec& spec) {
   const int64_t done = file.has(G) && file.group(G).has_attribute("generations_done")
                            ? file.group(G).read_int("generations_done")
                            : 0;
-  for (int g = static_cast<int>(done); g <= A.generations + 1; ++g)
-    if (file.has(gen_name(G, g))) H5Ldelete(file.id(), gen_name(G, g).c_str(), H5P_DEFAULT);
-  if (file.has(G + "/final") && done < A.generations + 1) H5Ldelete(file.id(), (G + "/final").c_str(), H5P_DEFAULT);
+  for (int g = static_cast<int>(done); g <= A.generations + 1; ++g) file.remove(gen_name(G, g));
+  if (done < A.generations + 1) file.remove(G + "/final");
   // the master's population: the survivors of the last committed generation
   // (read on every rank: a read made by one rank alone unbalances the ranks' HDF5 metadata caches, io/h5.hpp)
   std::vector<evo::Individual> population;

@@ -16,11 +16,11 @@
 #include "common/check.hpp"
 #include "io/run_file.hpp"
 #include "io/run_read.hpp"
-#include "stages/connectors.hpp"
 #include "stages/deploy.hpp"
 #include "stages/driver.hpp"
 #include "stages/episodes.hpp"
 #include "stages/payload.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {

@@ -17,7 +17,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <numeric>
+#include <utility>
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
@@ -29,6 +29,7 @@
 #include "morph/body.hpp"
 #include "stages/payload.hpp"
 #include "config/pipeline.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {
@@ -135,14 +136,18 @@ class LockstepPlan : public ConnectorsPlan {
   // numerical trouble, reported with where: pairs whose episode ran (status ok) but whose gradient was not
   // finite are left out of the step (they count in nan_pairs; one of them would have made the slot's weights
   // NaN); with run.precision = "float_networks", pairs whose float gradient overflowed were run again in double
-  void report_bad_gradients(int it, int c, int n, int redone) const {
+  // (said by the driver: take_warnings)
+  void report_bad_gradients(int it, int c, int n, int redone) {
+    const std::string at = slots_[c].group + " column " + std::to_string(slots_[c].column) + ", iteration " +
+                           std::to_string(it + 1) + ": ";
     if (n > 0)
-      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) ran but their gradient was not finite; left out of "
-                   "the step (counted in nan_pairs)\n", slots_[c].group.c_str(), slots_[c].column, it + 1, n);
+      warnings_.push_back(at + std::to_string(n) + " pair(s) ran but their gradient was not finite; left out of the "
+                          "step (counted in nan_pairs)");
     if (redone > 0)
-      std::fprintf(stderr, "%s column %d, iteration %d: %d pair(s) had a float gradient beyond float's range; "
-                   "run again with the networks in double\n", slots_[c].group.c_str(), slots_[c].column, it + 1, redone);
+      warnings_.push_back(at + std::to_string(redone) + " pair(s) had a float gradient beyond float's range; run "
+                          "again with the networks in double");
   }
+  std::vector<std::string> take_warnings() override { return std::exchange(warnings_, {}); }
   Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
     Records out = slot_row("curve_u", I_, it, cu);
     out += slot_row("curve_bl", I_, it, cb);
@@ -159,6 +164,7 @@ class LockstepPlan : public ConnectorsPlan {
   const std::string sg_;
   sim::Simulator sim_;
   std::vector<double> weights_;  // the round's weight vectors, Pc each (every rank)
+  std::vector<std::string> warnings_;  // of the last end_round
 };
 
 // the plain method: each slot's gradients summed in pair order, then one Adam (or normalized) step
@@ -439,33 +445,6 @@ std::vector<std::vector<double>> train_connectors(Driver& driver, const std::vec
   driver.drive(*plan);
   // every rank gets the trained weights
   return broadcast(driver, driver.master() ? plan->weights() : std::vector<std::vector<double>>{});
-}
-
-std::vector<morph::Agent> load_population(const sim::RunPhysics& physics, const io::h5::Node& file,
-                                          const std::string& group) {
-  // the main population's anchors are stored once, by the connectors stage; read back they are the numbers
-  // compute_anchors gives (tests/mpi/run_determinism_test.sh compares every dataset across runs)
-  const std::string at = io::anchors_path(group);
-  const bool stored = file.has(at);
-  // every rank reads (a read made by one rank alone unbalances the ranks' HDF5 metadata caches: io/h5.hpp)
-  std::vector<morph::Agent> agents;
-  for (const evo::Individual& x : io::read_final_population(file, group)) agents.push_back(x.agent);
-  if (stored) io::read_anchors(file, at, agents);
-  // otherwise anchors from each agent's own 1000-step run on flat: the same on every rank
-  if (!stored)
-    for (auto& a : agents) a.anchors = collective::compute_anchors(a, physics);
-  return agents;
-}
-
-void store_anchors(Driver& driver, const std::string& group, const std::vector<morph::Agent>& agents) {
-  const io::h5::File& file = driver.file();
-  const std::string at = io::anchors_path(group);
-  if (file.has(at)) return;
-  std::vector<int64_t> rows(agents.size());
-  std::iota(rows.begin(), rows.end(), 0);
-  if (!driver.master()) rows.clear();
-  file.write_rows<int32_t>(at, {static_cast<hsize_t>(agents.size()), 4}, rows,
-                           driver.master() ? io::anchors_rows(agents) : std::vector<int32_t>{});
 }
 
 void run_connectors_stage(Driver& driver) {

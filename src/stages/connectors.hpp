@@ -28,13 +28,6 @@
 namespace divcoll::stages {
 
 inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
-// the final agent population of the run file on every rank, with its anchors: the stored ones
-// (io::anchors_path: connectors/anchors, graded/<name>/connectors/anchors) once its connector training stored
-// them, otherwise computed (deterministically, under the run's `physics`)
-std::vector<morph::Agent> load_population(const sim::RunPhysics& physics, const io::h5::Node& file,
-                                          const std::string& group = "agents");
-// stores the anchors of `agents` (the population of `group`) once, at io::anchors_path(group)
-void store_anchors(Driver& driver, const std::string& group, const std::vector<morph::Agent>& agents);
 
 // one connector being trained: its springs, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its

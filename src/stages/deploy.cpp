@@ -10,9 +10,9 @@
 #include "collective/references.hpp"
 #include "common/check.hpp"
 #include "io/run_read.hpp"
-#include "stages/connectors.hpp"
 #include "stages/driver.hpp"
 #include "stages/payload.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {

@@ -8,6 +8,7 @@
 #include "io/run_read.hpp"
 #include "stages/connectors.hpp"
 #include "stages/driver.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 

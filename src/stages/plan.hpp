@@ -98,6 +98,9 @@ class Plan {
   virtual void reduce(int step, int64_t item, const std::string& result) = 0;
   // master: after the step's last result: its reduction, and the rows it records
   virtual Records end_round(int step) = 0;
+  // master: right after end_round(): what it met that deserves a warning (numerical trouble, each with where it
+  // happened), one line each, taken. The driver says them on standard error; a plan prints nothing
+  virtual std::vector<std::string> take_warnings() { return {}; }
   // master: one line's summary of the round just ended (after "label: iteration k/N: ")
   virtual std::string summary(int round) const { (void)round; return {}; }
   // master: the rows recorded once the rounds are done (written again when a finished stage is resumed),

@@ -6,9 +6,9 @@
 
 #include "collective/deploy_variants.hpp"
 #include "io/run_read.hpp"
-#include "stages/connectors.hpp"
 #include "stages/driver.hpp"
 #include "stages/episodes.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 namespace {

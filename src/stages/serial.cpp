@@ -80,6 +80,7 @@ SerialRun run_serial(Plan& plan, const SerialOptions& o, Plan* worker) {
     run.items += static_cast<int64_t>(call.items.size());
     for (size_t i = 0; i < results.size(); ++i) schedule.reduce(call, static_cast<int64_t>(i), results[i]);
     add(run.rounds, schedule.end(call));
+    for (std::string& w : plan.take_warnings()) run.warnings.push_back(std::move(w));
     if (!call.ends_rounds || call.closing) continue;
     for (int k = 0; k < call.rounds; ++k) run.summaries.push_back(plan.summary(call.round + k));
     if (call.commit && call.round + call.rounds == schedule.stop()) take_state();  // the last commit's state

@@ -4,7 +4,7 @@
 // their steps ended. The tests run every stage's plans through it (tests/stages/).
 //
 // Independent rounds are farmed one round a call unless SerialOptions asks for more (rounds_per_farm), or for the
-// driver's own farms at some rank count (ranks). The state is taken where the driver commits its last one: after
+// driver's own farms at some rank count (ranks). Each round's warnings (Plan::take_warnings) are collected, not printed. The state is taken where the driver commits its last one: after
 // the last counted round run, before the closing round.
 #pragma once
 
@@ -41,6 +41,7 @@ struct SerialRun {
   std::vector<std::pair<std::string, int64_t>> state_attributes;  // and its state attributes
   Records finish;                     // finish(), when the last round was run
   std::vector<std::string> summaries;  // summary() of every counted round run
+  std::vector<std::string> warnings;   // take_warnings() after every end_round(), in order
   std::string finish_summary;
   int done = 0;        // rounds done at the end
   int64_t items = 0;   // items computed

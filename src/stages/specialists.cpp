@@ -11,6 +11,7 @@
 #include "stages/deploy.hpp"
 #include "stages/driver.hpp"
 #include "stages/episodes.hpp"
+#include "stages/population.hpp"
 
 namespace divcoll::stages {
 

@@ -7,10 +7,12 @@
 #   morph collective evo analysis  divcoll_science  (no MPI, no HDF5)
 #   io                   divcoll_io       the rest of io/ (HDF5)
 #   stages               divcoll_stages   each stage as a plan, its runner, the serial farm (no MPI calls)
+#   study                divcoll_study    a study's runs: study file, plan, folder and manifest, adopt, status,
+#                                         submit (no MPI calls: the command's session runs the runs)
 #   mpi                  divcoll_mpi      the driver over the ranks, the farm, checkpoints, stop signals
 #   cli                  divcoll_cli      the commands and main (on top)
 # Units on one line share a level only when named so below (evo and analysis do; neither includes the other).
-set(DIVCOLL_UNITS common nn sim config morph collective evo analysis io stages mpi cli)
+set(DIVCOLL_UNITS common nn sim config morph collective evo analysis io stages study mpi cli)
 set(DIVCOLL_LEVEL_common 0)
 set(DIVCOLL_LEVEL_nn 1)
 set(DIVCOLL_LEVEL_sim 2)
@@ -21,8 +23,9 @@ set(DIVCOLL_LEVEL_evo 6)
 set(DIVCOLL_LEVEL_analysis 6)
 set(DIVCOLL_LEVEL_io 7)
 set(DIVCOLL_LEVEL_stages 8)
-set(DIVCOLL_LEVEL_mpi 9)
-set(DIVCOLL_LEVEL_cli 10)
+set(DIVCOLL_LEVEL_study 9)
+set(DIVCOLL_LEVEL_mpi 10)
+set(DIVCOLL_LEVEL_cli 11)
 
 # the unit of a path relative to the root (src/sim/engine.cpp) or of an include ("sim/engine.hpp")
 function(divcoll_unit path out)

@@ -104,5 +104,26 @@ TEST_F(H5WriteRows, ARowGivenTwiceIsRefused) {
   }
 }
 
+// the one way a file's objects and attributes are dropped (a stage redone with --from, a generation written after the
+// last commit): a link that is there goes, one that is not is no error
+TEST_F(H5WriteRows, RemoveDropsALinkOrAnAttributeIfThereIsOne) {
+  {
+    h5::File f = h5::File::create(path("r.h5"), true);
+    f.write<double>("g/x", {1, 2}, {2});
+    f.create_group("g/sub");
+    f.write_string("note", "n");
+    EXPECT_TRUE(f.remove("g/x"));
+    EXPECT_FALSE(f.remove("g/x"));
+    EXPECT_FALSE(f.remove("nothing/here"));
+    EXPECT_TRUE(f.remove("g"));  // a group with what it holds
+    EXPECT_TRUE(f.remove_attribute("note"));
+    EXPECT_FALSE(f.remove_attribute("note"));
+    f.close();
+  }
+  h5::File f = h5::File::open(path("r.h5"));
+  EXPECT_FALSE(f.has("g"));
+  EXPECT_FALSE(f.has_attribute("note"));
+}
+
 }  // namespace
 }  // namespace divcoll::io

@@ -220,6 +220,35 @@ TEST_F(RunFileWrite, CheckNamesWhatTheSchemaLacks) {
 }
 
 // the run-file manual's tables are the schema's (regenerate them with `divcoll schema`)
+// divcoll run --from on a copy of a run file: the groups of --from's stage and the later ones go, the earlier ones stay
+// with their provenance as base_*, and the copy is a new run (its config, this binary, no end)
+TEST_F(RunFileWrite, DeriveKeepsTheEarlierStagesAndStartsANewRun) {
+  {
+    h5::File f = run_file("base.h5");
+    for (const char* g : {"agents", "connectors", "analysis"}) f.create_group(g).write_string("status", "complete");
+    f.write_string("config", "old");
+    f.write_string("git_commit", "c0");
+    f.write_string("start_time", "t0");
+    f.write_string("end_time", "t1");
+    f.write_int("resumed", 2);
+    derive(f, "deploy", "new", "t2", "base.h5 (stages before deploy)");
+    f.close();
+  }
+  h5::File f = h5::File::open(path("base.h5"));
+  EXPECT_TRUE(f.has("agents"));
+  EXPECT_TRUE(f.has("connectors"));
+  EXPECT_FALSE(f.has("deploy"));
+  EXPECT_FALSE(f.has("analysis"));
+  EXPECT_EQ(f.read_string("config"), "new");
+  EXPECT_EQ(f.read_string("base_git_commit"), "c0");
+  EXPECT_EQ(f.read_string("base_start_time"), "t0");
+  EXPECT_EQ(f.read_string("start_time"), "t2");
+  EXPECT_EQ(f.read_string("derived_from"), "base.h5 (stages before deploy)");
+  EXPECT_FALSE(f.has_attribute("end_time"));
+  EXPECT_FALSE(f.has_attribute("resumed"));
+  EXPECT_TRUE(f.has_attribute("git_commit"));
+}
+
 TEST(RunFileSchema, ReadmeTablesAreTheSchema) {
   const std::string manual = testing::doc("mpi/README.md");
   ASSERT_FALSE(manual.empty()) << "mpi/README.md not found";
