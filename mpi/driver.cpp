@@ -354,13 +354,6 @@ void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& pl
   }
 }
 
-}  // namespace
-
-void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
-           const std::function<void()>& checkpoint) {
-  PlanDrive(comm, cfg, file, plan, checkpoint).run();
-}
-
 bool run_with_status(io::h5::File& file, const std::string& group, const std::function<void()>& checkpoint,
                      const std::function<void()>& body) {
   if (complete(file, group)) return false;

@@ -22,6 +22,12 @@
 namespace divcoll::cli {
 namespace {
 
+// the stages --from may name: every stage of DIVCOLL_STAGES but the first (agents is never recomputed on a copy)
+std::vector<std::string> from_stages() {
+  const std::vector<std::string>& all = io::stage_names();
+  return std::vector<std::string>(all.begin() + 1, all.end());
+}
+
 // one subcommand of `divcoll`
 struct Command {
   const char* name;
@@ -258,7 +264,7 @@ std::vector<Command> commands() {
             run_options(r, a);
             r.add_option("--from", a.from,
                          "rerun this stage and the later ones on a copy of --base's earlier stages (written to --out)")
-                ->check(CLI::IsMember({"connectors", "deploy", "specialists", "scaling", "graded", "analysis"}));
+                ->check(CLI::IsMember(from_stages()));
             r.add_option("--base", a.base, "the run file whose earlier stages --from reuses")->check(CLI::ExistingFile);
           },
           run_main),

@@ -105,7 +105,7 @@ TEST(Graded, TheDriverAndTheSerialFarmMakeTheSameFarmCallsOfItsPopulationsAndThe
   // their deployment
   const std::vector<morph::Agent> agents = test::random_population(3, 9);
   Rng wr = make_rng(2, 2, 2);
-  const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr)};
+  const std::vector<std::vector<double>> weights = {morph::init_connector_params(wr, morph::kConnectorInitGains[2])};
   const std::vector<std::pair<int, int>> pairs = {{0, 2}, {1, 0}};
   auto make = [&] { return make_graded_deploy_plan(graded_def(cfg), 0, agents, weights, pairs); };
   test::expect_driver_and_serial_calls_agree(make);
