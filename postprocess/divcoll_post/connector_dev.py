@@ -138,8 +138,7 @@ def select(cands: Sequence[Candidate], seeds: Sequence[int]) -> Optional[Candida
 def curves_figure(cands: Sequence[Candidate], path: str) -> bool:
     """learning curves: per weak kind, each candidate's validation-batch travel per iteration (keep-best runs) or
     its training batch's (the others), mean over the development populations"""
-    from .verdict_page import _pyplot, _save
-    plt = _pyplot()
+    plt = R.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), sharey=False)
     drawn = False
     cmap = plt.get_cmap("tab20")
@@ -164,7 +163,7 @@ def curves_figure(cands: Sequence[Candidate], path: str) -> bool:
         ax.set_ylabel("pair travel, BL")
     axes[1].legend(fontsize=6, loc="lower right", ncol=2)
     if drawn:
-        _save(plt, fig, path)
+        R.save_figure(plt, fig, path)
     else:
         plt.close(fig)
     return drawn

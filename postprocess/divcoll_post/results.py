@@ -516,3 +516,18 @@ def run_script(name: str, draw, args) -> int:
     for p in paths:
         print(p)
     return 0
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (files only, no display)"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def save_figure(plt, fig, path):
+    """a page's figure as PNG at 120 dpi, laid out tight, then closed"""
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -74,17 +74,7 @@ def cell(r):
     return f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {r.claim.unit} · {v}"
 
 
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
-def _save(plt, fig, path):
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+_pyplot, _save = R.pyplot, R.save_figure
 
 
 def forest(results: Sequence[V.Result], path, title):
