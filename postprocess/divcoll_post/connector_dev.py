@@ -206,11 +206,13 @@ def write(folder: str, out: str) -> str:
                      f"{c.cost:,.0f} | {c.wall_s:.0f} | {', '.join(f'`{k}`' for k in c.keys) or 'defaults'} |")
     ref_rows = {}
     for c in done:
-        for (s, k), v in c.cells().items():
-            ref_rows[(s, k)] = v
+        if c.eligible:  # a reading's references are its own model's (its stiffness, its dashpot)
+            for (s, k), v in c.cells().items():
+                ref_rows[(s, k)] = v
     if ref_rows:
-        lines += ["", "References on the same populations and pairs (flat, 3000 steps; the same in every candidate's "
-                  "run of a population):", "", "| population | kind's pairs | agents alone | free | passive | follower |",
+        lines += ["", "References on the same populations and pairs (flat, 3000 steps; the same in every eligible "
+                  "candidate's run of a population; a reading's *of follower* is against its own model's follower, at "
+                  "its stiffness and dashpot):", "", "| population | kind's pairs | agents alone | free | passive | follower |",
                   "|---|---|---|---|---|---|"]
         for (s, k), v in sorted(ref_rows.items()):
             dep = "clones" if k == "weak_uniform" else "diverse pairs"
