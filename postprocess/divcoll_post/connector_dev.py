@@ -227,6 +227,11 @@ def write(folder: str, out: str) -> str:
         lines.append(f"**{chosen.name}** (S = {chosen.S:.3f}, {chosen.S_follower:.2f} of the follower; "
                      f"{', '.join(f'`{k}`' for k in chosen.keys) or 'the defaults'}), by A5's rule "
                      f"(largest S among the eligible candidates, ties within {TIE} to the cheaper).")
+        tied = [c for c in cands if c is not chosen and c.eligible and np.isfinite(c.S) and c.S >= chosen.S - TIE]
+        if tied:
+            lines.append("Tied with it (within " + f"{TIE}): " + ", ".join(
+                f"{c.name} (S = {c.S:.3f}, {c.cost:,.0f} pair-episodes, {len(c.keys)} keys)" for c in tied)
+                + "; the tie went to the cheaper, then the one with fewer keys changed, then the larger S.")
     if curves_figure(cands, os.path.join(out, "curves.png")):
         lines += ["", "## Learning curves", "", "![learning curves](curves.png)", "",
                   "Solid: eligible candidates; dotted: readings of the model. Keep-best candidates show the validation "
