@@ -97,7 +97,7 @@ def extract(path: str) -> dict:
             out["deploy"] = dep
         if complete(f, "analysis"):
             a = f["analysis"]
-            adv, fam = {}, {}
+            adv, fam, fam_cal = {}, {}, {}
             for t in list_attr(a, "types"):
                 g = a[f"adversity/{t}"]
                 dtw, ws = g["dtw"][()], g["worse_slot"][()]  # (E, R, P, 2), (E, R, P)
@@ -109,8 +109,13 @@ def extract(path: str) -> dict:
                               "better": _lists(np.nanmean(better, axis=(0, 2)))}
                 c = a[f"familiarity/{t}/counts"][()]  # (E_novel, R, 6)
                 fam[t] = _lists(c[..., :3])
+                if f"familiarity/{t}/counts_calibrated" in a:  # analysis.calibrated_cell_scale > 0 (A6's C24c)
+                    fam_cal[t] = _lists(a[f"familiarity/{t}/counts_calibrated"][()][..., :3])
             out["analysis"] = {"novel_environments": list_attr(a, "novel_environments"), "dtw": adv,
                                "familiarity": fam}
+            if fam_cal:
+                out["analysis"]["familiarity_calibrated"] = fam_cal
+                out["analysis"]["calibrated_cell_scale"] = cfg["analysis"]["calibrated_cell_scale"]
         if complete(f, "specialists"):
             s = f["specialists"]
             m, _ = ok_means(s["travel_bl"][()], s["status"][()], 2)  # (E_s, R_s)
@@ -247,9 +252,10 @@ class Population:
         v = _arr(self.a["analysis"]["dtw"][t][which])
         return self._pick(v, None if draws is None else draws[t.split("@")[0]], 0)  # (b,)
 
-    def familiarity(self, t, draws=None):
-        """(b, E_novel, 3): states in both / training-only / novel-only cells, mean over (drawn) connectors"""
-        v = _arr(self.a["analysis"]["familiarity"][t])  # (E, R, 3)
+    def familiarity(self, t, draws=None, calibrated=False):
+        """(b, E_novel, 3): states in both / training-only / novel-only cells, mean over (drawn) connectors; with
+        calibrated, at analysis.calibrated_cell_scale (KeyError when the run did not count there)"""
+        v = _arr(self.a["analysis"]["familiarity_calibrated" if calibrated else "familiarity"][t])  # (E, R, 3)
         return self._pick(v, None if draws is None else draws[t.split("@")[0]], 1)
 
     def specialists_best(self, draws=None):
@@ -464,10 +470,15 @@ def e_uniform_more_train_only(p, d, pr):
     return _fam_share_count(p, d, 1, False)
 
 
-def e_wind_unfamiliar(p, d, pr):
+def e_wind_unfamiliar(p, d, pr, calibrated=False):
     e = p.a["analysis"]["novel_environments"].index("wind")
-    fd, fu = p.familiarity(WD, d)[:, e, :], p.familiarity(WU, d)[:, e, :]
+    fd, fu = p.familiarity(WD, d, calibrated)[:, e, :], p.familiarity(WU, d, calibrated)[:, e, :]
     return fd[:, 0] / fd.sum(axis=1) - fu[:, 0] / fu.sum(axis=1)
+
+
+def e_wind_unfamiliar_calibrated(p, d, pr):
+    """C24c (amendment A6): C24's effect at the calibrated cell scale"""
+    return e_wind_unfamiliar(p, d, pr, calibrated=True)
 
 
 def e_wind_exclusive_ratio(p, d, pr):
@@ -686,6 +697,13 @@ def d_wind(p, pr):
             f"or wind: diverse-trained {fd[1] + fd[2]:.1f}, uniform-trained {fu[1] + fu[2]:.1f}")
 
 
+def d_wind_calibrated(p, pr):
+    e = p.a["analysis"]["novel_environments"].index("wind")
+    fd, fu = p.familiarity(WD, None, True)[0][e], p.familiarity(WU, None, True)[0][e]
+    return (f"wind at cell scale {p.a['analysis']['calibrated_cell_scale']:g}, share of states in shared cells: "
+            f"diverse-trained {fd[0] / fd.sum():.3f}, uniform-trained {fu[0] / fu.sum():.3f}")
+
+
 def d_scaling(p, pr):
     s = p.scaling(None)[0]
     return "; ".join(f"N={n}: diverse − uniform {s[i, 1] - s[i, 0]:+.2f} BL" for i, n in
@@ -825,6 +843,12 @@ CLAIMS: List[Claim] = [
           "Fig. 3B-C", "ratio ≈ 1.64", "ln(exclusive states of wind's fit, wu@u / wd@d)", "greater", math.log(1.1),
           "", ("analysis",), e_wind_exclusive_ratio,
           counts=N_ANALYSIS, describe=d_wind,
+          episodes=("", False, "pair", "wind")),
+    Claim("C24c", "A6", "Wind feels more unfamiliar to the uniform-trained connector (calibrated cells)",
+          "Fig. 3B-C", "158,118 vs 131,303 in both",
+          "share of wind's fit in shared cells at the calibrated cell scale, wd@d − wu@u", "greater", SHARE, "",
+          ("analysis",), e_wind_unfamiliar_calibrated,
+          counts=N_ANALYSIS, describe=d_wind_calibrated,
           episodes=("", False, "pair", "wind")),
     Claim("C25", "S", "The advantage of diversity grows with collective size", "Fig. 4", "Fig. 4",
           "adv(20) − adv(5), adv = N(diverse chains) − N(uniform chains)", "greater", BL, "BL", ("scaling",),

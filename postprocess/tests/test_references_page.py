@@ -82,6 +82,24 @@ class AmendmentStatistics(unittest.TestCase):
         self.assertAlmostEqual(float(V.e_wind_exclusive_ratio(p, None, "same_length")[0]), np.log(2.0), places=12)
         self.assertEqual(V.BY_ID["C24b"].family, "A6")  # its own Holm family: family M's adjustments stay
 
+    def test_c24c_is_c24_at_the_calibrated_counts_and_missing_without_them(self):
+        rng = np.random.Generator(np.random.PCG64(5))
+        a = synthetic(1, rng, R=2)
+        w = ENVS[1:].index("wind")
+        cal = {t: np.full((12, 2, 3), 100.0) for t in (V.WU, V.WD)}
+        cal[V.WU][w] = [60.0, 20.0, 20.0]  # 0.6 of wind's states in shared cells
+        cal[V.WD][w] = [75.0, 15.0, 10.0]  # 0.75
+        p = V.Population(1, [a])
+        with self.assertRaises(KeyError):  # a run without analysis.calibrated_cell_scale: not measured
+            V.e_wind_unfamiliar_calibrated(p, None, "same_length")
+        a["analysis"]["familiarity_calibrated"] = {t: v.tolist() for t, v in cal.items()}
+        a["analysis"]["calibrated_cell_scale"] = 12.0
+        p = V.Population(1, [a])
+        self.assertAlmostEqual(float(V.e_wind_unfamiliar_calibrated(p, None, "same_length")[0]), 0.15, places=12)
+        self.assertNotAlmostEqual(float(V.e_wind_unfamiliar(p, None, "same_length")[0]), 0.15)
+        self.assertEqual(V.BY_ID["C24c"].family, "A6")
+        self.assertIn("cell scale 12", V.d_wind_calibrated(p, "same_length"))
+
     def test_the_spread_rules_differ_on_heavy_tailed_resamples(self):
         point = np.array([1.0, 1.2, 0.8, 1.1])
         th = np.r_[np.random.Generator(np.random.PCG64(1)).normal(1.0, 0.1, 1990), np.full(10, 40.0)]

@@ -241,7 +241,11 @@ class Page(unittest.TestCase):
             for c, row in zip(analysis, rows):
                 for v, text in zip(("n10k", "n30k"), row[2:]):
                     pop = V.Population(1, [arrays[v][1]])
-                    e = float(c.effect(pop, None, "same_length")[0])
+                    try:
+                        e = float(c.effect(pop, None, "same_length")[0])
+                    except KeyError:  # C24c without counts at a calibrated cell scale
+                        self.assertEqual(text, "—", (c.id, v))
+                        continue
                     self.assertTrue(text.startswith(verdict_page.num(e)), (c.id, v, text, e))
         finally:
             shutil.rmtree(d)

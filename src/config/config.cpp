@@ -371,6 +371,11 @@ const std::vector<Key>& schema() {
         num("analysis", "cell_scale", T::Double, "1.0", "(0, 1000]", "1/cell",
             "familiarity cells: PaCMAP coordinates × cell_scale are rounded to integers (1 = the paper's unit "
             "cells; 2 = cells half as wide, ANALYSIS.md §5)", DIVCOLL_FIELD(analysis.cell_scale)),
+        num("analysis", "calibrated_cell_scale", T::Double, "0.0", "[0, 1000]", "1/cell",
+            "familiarity counts also at this second cell scale, from the same fits (0 = none): "
+            "analysis/familiarity/<type>/counts_calibrated. The protocol's statistic C24c reads it at the scale "
+            "configs/studies/verdicts_cells.toml calibrates (configs/studies/verdicts_protocol.md, A6)",
+            DIVCOLL_FIELD(analysis.calibrated_cell_scale)),
         pick("analysis", "familiarity_on", T::Choice, "\"hidden\"", {"hidden", "inputs"},
              "what the familiarity analysis embeds: hidden = the connector's second hidden layer (32 values, SPEC "
              "§8.2); inputs = its 11 network inputs, its percepts (SPEC §6.3), at the same sampled (step, spring): "

@@ -117,6 +117,7 @@ struct RunConfig {
     std::string dtw_step;        // symmetric1 | symmetric2
     std::string dtw_norm;        // path_length | sum_lengths | max_length (ANALYSIS.md §2.4)
     double cell_scale{};         // familiarity cells: round(cell_scale · PaCMAP coordinate)
+    double calibrated_cell_scale{};  // > 0: familiarity counts also at this cell scale (counts_calibrated)
     std::string familiarity_on;  // hidden | inputs: what the familiarity PaCMAP embeds (SPEC §8.2: hidden)
     bool operator==(const Analysis&) const = default;
   };

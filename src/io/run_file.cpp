@@ -266,6 +266,8 @@ std::vector<Entry> base_entries() {
       G("analysis/familiarity/{type}", "", "one deployment type"),
       D("analysis/familiarity/{type}/counts", "int64", "novel_env,replicate,count", "count",
         "states and cells by what the cells hold"),
+      D("analysis/familiarity/{type}/counts_calibrated", "int64", "novel_env,replicate,count", "count",
+        "counts as above at analysis.calibrated_cell_scale (when > 0)"),
       D("analysis/familiarity/{type}/n_states", "int64", "novel_env,replicate,source", "count", "states in the fit"),
       D("analysis/familiarity/{type}/embedding", "float32", "novel_env,replicate,state,component", "1",
         "the fit's 2-D coordinates"),

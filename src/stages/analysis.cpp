@@ -72,11 +72,12 @@ void serialize(Ar& ar, FitTask& t, unsigned) {
 struct FitDone {
   int32_t n_train = 0, n_novel = 0;  // the states of the fit, training first
   std::vector<int64_t> counts;       // 6
+  std::vector<int64_t> counts_calibrated;  // 6 at analysis.calibrated_cell_scale; empty when it is 0
   std::vector<float> embedding;      // (n_train + n_novel) × 2
 };
 template <class Ar>
 void serialize(Ar& ar, FitDone& d, unsigned) {
-  ar & d.n_train & d.n_novel & d.counts & d.embedding;
+  ar & d.n_train & d.n_novel & d.counts & d.counts_calibrated & d.embedding;
 }
 
 bool same_bits(double x, double y) { return (std::isnan(x) && std::isnan(y)) || x == y; }
@@ -418,12 +419,16 @@ class FamiliarityPlan final : public Plan {
     const std::vector<double> y = analysis::pacmap_fit(X.data(), n, dim_, po);
     std::vector<uint8_t> label(n, 0);
     std::fill(label.begin() + d.n_train, label.end(), 1);
-    std::vector<double> cells = y;  // analysis.cell_scale: finer (or coarser) cells than the unit ones
-    if (A_.cell_scale != 1.0)
-      for (double& c : cells) c *= A_.cell_scale;
-    const analysis::Occupancy o = analysis::classify_cells(cells, label);
-    d.counts = {o.states_both, o.states_train_only, o.states_novel_only, o.cells_both, o.cells_train_only,
-                o.cells_novel_only};
+    const auto count = [&](double scale) {  // finer (or coarser) cells than the unit ones
+      std::vector<double> cells = y;
+      if (scale != 1.0)
+        for (double& c : cells) c *= scale;
+      const analysis::Occupancy o = analysis::classify_cells(cells, label);
+      return std::vector<int64_t>{o.states_both, o.states_train_only, o.states_novel_only,
+                                  o.cells_both,  o.cells_train_only,  o.cells_novel_only};
+    };
+    d.counts = count(A_.cell_scale);
+    if (A_.calibrated_cell_scale > 0) d.counts_calibrated = count(A_.calibrated_cell_scale);
     d.embedding.assign(y.begin(), y.end());
     return pack(d);
   }
@@ -438,11 +443,13 @@ class FamiliarityPlan final : public Plan {
     const hsize_t hEN = EN_, hR = R_, hS = 2 * static_cast<hsize_t>(A_.max_states);
     Records out;
     for (int t = 0; t < 2; ++t) {
-      std::vector<int64_t> counts;
+      std::vector<int64_t> counts, calibrated;
       std::vector<float> emb;
       for (int r = 0; r < R_; ++r) {
         const FitDone& d = done_[k][static_cast<size_t>(t) * R_ + r];
         counts.insert(counts.end(), d.counts.begin(), d.counts.end());
+        if (d.counts_calibrated.empty()) calibrated.insert(calibrated.end(), 6, 0);  // a fit with too few states
+        else calibrated.insert(calibrated.end(), d.counts_calibrated.begin(), d.counts_calibrated.end());
         std::vector<float> padded(2 * hS, std::numeric_limits<float>::quiet_NaN());
         std::copy(d.embedding.begin(), d.embedding.end(), padded.begin());
         emb.insert(emb.end(), padded.begin(), padded.end());
@@ -452,6 +459,8 @@ class FamiliarityPlan final : public Plan {
       const std::vector<int64_t> ns(ns_[t].begin() + 2 * at, ns_[t].begin() + 2 * (at + R_));
       const std::string g = "analysis/familiarity/" + kTypes[t];
       out.push_back({g + "/counts", {hEN, hR, 6}, {k}, std::move(counts)});
+      if (A_.calibrated_cell_scale > 0)
+        out.push_back({g + "/counts_calibrated", {hEN, hR, 6}, {k}, std::move(calibrated)});
       out.push_back({g + "/n_states", {hEN, hR, 2}, {k}, ns});
       out.push_back({g + "/embedding", {hEN, hR, hS, 2}, {k}, std::move(emb)});
     }

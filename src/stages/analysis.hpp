@@ -33,6 +33,8 @@
 //   adversity/welch               (2 × 3)              worse / better: t, df, p (uniform vs diverse type)
 //   familiarity/<type>/counts     (novel E × R × 6)    states in both / train-only / novel-only cells, then
 //                                                      the cells: both / train-only / novel-only
+//   familiarity/<type>/counts_calibrated  (novel E × R × 6)  the same counts at analysis.calibrated_cell_scale
+//                                                      (only when it is > 0)
 //   familiarity/<type>/n_states   (novel E × R × 2)    training and novel states in the fit
 //   familiarity/<type>/embedding  (novel E × R × 2·max_states × 2, float32)  the fit's 2-D coordinates:
 //                                                      training states first, then novel; NaN padding

@@ -213,6 +213,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "analysis.dtw_step",
                                              "analysis.dtw_norm",
                                              "analysis.cell_scale",
+                                             "analysis.calibrated_cell_scale",
                                              "analysis.familiarity_on",
                                              "output.dir",
                                              "output.checkpoint_every",

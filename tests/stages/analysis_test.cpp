@@ -52,13 +52,14 @@ struct Case {
     // weak_uniform@uniform is deploy's type 0, weak_diverse@diverse its type 3
     return make_adversity_plan(analysis_def(cfg), agents, weights, pairs, {0, 3}, 4, {"ice"}, std::move(d));
   }
-  std::unique_ptr<Plan> familiarity() const {
+  std::unique_ptr<Plan> familiarity() const { return familiarity(cfg); }
+  std::unique_ptr<Plan> familiarity(const io::RunConfig& with) const {
     std::array<std::vector<float>, 2> hidden;
     for (int t = 0; t < 2; ++t)
       for (double v : test::at(deployed, "deploy/hidden/" + kAnalysisTypes[t] + "/states").values)
         hidden[t].push_back(static_cast<float>(v));
     const int K = static_cast<int>(test::at(deployed, "deploy/hidden/" + kAnalysisTypes[0] + "/states").dims[3]);
-    return make_familiarity_plan(analysis_def(cfg), {"ice"}, std::move(hidden), K, 32);
+    return make_familiarity_plan(analysis_def(with), {"ice"}, std::move(hidden), K, 32);
   }
 };
 
@@ -123,6 +124,28 @@ TEST(FamiliarityPlan, FitsEachNovelEnvironmentAgainstFlatAndTabulatesTheCells) {
   test::expect_same(test::written(run_serial(*master, o, worker.get())), d);
 }
 
+// analysis.calibrated_cell_scale counts the same fits' states again at a second scale: what a run at that
+// cell_scale counts, while the unit-scale counts stay as they were; with 0 there is no second dataset
+TEST(FamiliarityPlan, TheCalibratedScaleCountsTheSameFitsAsThatCellScaleWould) {
+  const Case c;
+  const test::Datasets unit = test::written(run_serial(*c.familiarity()));
+  io::RunConfig both = c.cfg, fine = c.cfg;
+  both.analysis.calibrated_cell_scale = 3.0;
+  fine.analysis.cell_scale = 3.0;
+  const test::Datasets d = test::written(run_serial(*c.familiarity(both)));
+  const test::Datasets at3 = test::written(run_serial(*c.familiarity(fine)));
+  bool differs = false;
+  for (const std::string& t : kAnalysisTypes) {
+    const std::string g = "analysis/familiarity/" + t;
+    EXPECT_EQ(unit.count(g + "/counts_calibrated"), 0u);
+    EXPECT_EQ(test::at(d, g + "/counts").values, test::at(unit, g + "/counts").values);
+    EXPECT_EQ(test::at(d, g + "/embedding").values, test::at(at3, g + "/embedding").values);
+    EXPECT_EQ(test::at(d, g + "/counts_calibrated").dims, test::at(at3, g + "/counts").dims);
+    EXPECT_EQ(test::at(d, g + "/counts_calibrated").values, test::at(at3, g + "/counts").values);
+    differs = differs || test::at(at3, g + "/counts").values != test::at(unit, g + "/counts").values;
+  }
+  EXPECT_TRUE(differs);  // finer cells count differently here, so the comparison above could fail
+}
 
 TEST(AnalysisPlans, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
   const Case c;
