@@ -22,7 +22,7 @@ import dataclasses
 import os
 import sys
 import tomllib
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -329,6 +329,29 @@ def judge_study(folder: str, B: int = V.B_DEFAULT) -> Judged:
                   + judge_family(main, "A6", B=B))
 
 
+def besteffort_folder(folder: str) -> str:
+    """the kept confirmation study of best-effort connector training (verdicts_besteffort.toml, amendment A5),
+    beside the paper-faithful one: <folder>_besteffort"""
+    return os.path.normpath(folder) + "_besteffort"
+
+
+def judge_besteffort(folder: str, B: int = V.B_DEFAULT) -> Optional[Judged]:
+    """the best-effort confirmation beside a verdicts study, judged by the same rules (families M′, S′ and A6′ are
+    the claims of M, S and A6 on its own populations, each its own Holm family); None when it has no kept run"""
+    be = besteffort_folder(folder)
+    if not os.path.exists(os.path.join(be, "study.toml")):
+        return None
+    with open(os.path.join(be, "study.toml"), "rb") as fh:
+        man = tomllib.load(fh)
+    main = V.load_study(be, MAIN_VARIANTS)
+    if not main:
+        return None
+    supp = [p for p in V.load_study(be, SUPPLEMENT_VARIANTS) if any(p.has(s) for s in ("specialists", "scaling",
+                                                                                        "graded"))]
+    return Judged(man, main, supp, judge_family(main, "M", B=B) + judge_family(supp, "S", B=B)
+                  + judge_family(main, "A6", B=B))
+
+
 def references_folder(folder: str) -> str:
     """the kept study of the reference connectors of a verdicts study's populations (verdicts_references.toml),
     beside it: <folder>_references"""
@@ -369,9 +392,10 @@ def on_threshold(res: Sequence[V.Result], rel: float = 0.2) -> List[V.Result]:
     return out
 
 
-def amendment_sections(j: Judged, B: int) -> List[str]:
+def amendment_sections(j: Judged, B: int, jb: Optional[Judged] = None) -> List[str]:
     """markdown: the claims on Holm's threshold, the verdicts that an amendment changes (A4's spread rule), and
-    amendment A6's statistics (C24b; C24c when a calibrated run exists)"""
+    amendment A6's statistics (C24b; C24c where the runs counted at the calibrated cell scale), for the best-effort
+    confirmation too when there is one"""
     lines = []
     mine = [r for r in j.res if r.claim.family in ("M", "S")]
     near = on_threshold(mine)
@@ -401,13 +425,52 @@ def amendment_sections(j: Judged, B: int) -> List[str]:
                   "C24's share of wind's fit in shared cells is 0.995-0.999 for every type at this program's cell size, "
                   "so its margin of 0.02 cannot be reached whatever the connectors do. C24b compares the states that "
                   "lie in cells of one source only, as a ratio (its own Holm family; the paper's ratio is "
-                  "(200,000 − 131,303) / (200,000 − 158,118) ≈ 1.64, ln 1.64 = 0.49). C24c, C24 at a cell scale "
-                  "calibrated to the paper's exclusive shares, needs runs with that scale (the confirmation study).",
-                  "", "| id | claim | paper | effect [95% interval] · verdict | per population |", "|---|---|---|---|---|"]
-        for r in a6:
-            pp = ", ".join(f"{s}: {v:.3g}" for s, v in r.per_population.items())
-            lines.append(f"| {r.claim.id} | {r.claim.text} | {r.claim.paper} | {cell(r)} | {pp or '—'} |")
+                  "(200,000 − 131,303) / (200,000 − 158,118) ≈ 1.64, ln 1.64 = 0.49). C24c is C24 at the cell scale "
+                  "calibrated on development population 101 to the paper's exclusive shares (4.7; "
+                  "configs/studies/verdicts_cells.toml); only runs that counted their familiarity there "
+                  "(analysis.calibrated_cell_scale: the best-effort confirmation) measure it.",
+                  "", "| id | training | claim | paper | effect [95% interval] · verdict | per population |",
+                  "|---|---|---|---|---|---|"]
+        for name, judged in (("paper-faithful", j), ("best-effort", jb)):
+            for r in ([r for r in judged.res if r.claim.family == "A6"] if judged else []):
+                pp = ", ".join(f"{s}: {v:.3g}" for s, v in r.per_population.items())
+                lines.append(f"| {r.claim.id} | {name} | {r.claim.text} | {r.claim.paper} | {cell(r)} | "
+                             f"{pp or '—'} |")
     return lines
+
+
+def besteffort_lines(j: Judged, jb: Optional[Judged], B: int) -> List[str]:
+    """markdown: the best-effort confirmation (amendment A5) beside the paper-faithful study: its populations, the
+    claims whose verdict the training changes, and its reference connectors per population"""
+    lines = ["", "## Best-effort connector training (amendment A5)", ""]
+    if jb is None:
+        return lines + ["No kept run of the confirmation yet (configs/studies/verdicts_besteffort.toml, kept in "
+                        "postprocess/gallery/studies/verdicts_besteffort)."]
+    planned = jb.planned
+    lines += [f"Study `{jb.man['name']}` ([configs/studies/verdicts_besteffort.toml]"
+              "(../../../configs/studies/verdicts_besteffort.toml)): the training the development grid chose (the "
+              "follower start, cosine rate, keep-best; postprocess/gallery/connector_dev/connector_dev.md) on fresh "
+              f"populations, judged by the same rules as families M′, S′ and A6′. Main text {len(jb.main)} of "
+              f"{len(planned)} planned (seeds {', '.join(str(p.seed) for p in jb.main)}); supplement {len(jb.supp)} "
+              f"of 5 (seeds {', '.join(str(p.seed) for p in jb.supp) or 'none yet'}). Run files made by divcoll "
+              f"{', '.join(provenance(None, jb.main + jb.supp)[0]) or '—'}.", ""]
+    if len(jb.main) < len(planned) or len(jb.supp) < 5:
+        lines += [f"**Interim**: {len(jb.main)} of {len(planned)} main-text and {len(jb.supp)} of 5 supplement "
+                  "populations are in; the protocol's verdicts are those at the planned counts.", ""]
+    counts: Dict[str, int] = {}
+    for r in jb.res:
+        counts[r.verdict] = counts.get(r.verdict, 0) + 1
+    lines += ["Verdicts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + ".", ""]
+    pf = {r.claim.id: r for r in j.res}
+    moved = [(pf[r.claim.id], r) for r in jb.res if r.claim.id in pf and r.verdict != pf[r.claim.id].verdict
+             and r.verdict not in ("too few populations", "not measured")]
+    lines += ["Claims whose verdict differs between the trainings:", ""]
+    if moved:
+        lines += ["| id | claim | paper-faithful | best-effort |", "|---|---|---|---|"]
+        lines += [f"| {a.claim.id} | {a.claim.text} | {cell(a)} | {cell(b)} |" for a, b in moved]
+    else:
+        lines.append("none.")
+    return lines + reference_lines(jb.main)
 
 
 def reference_lines(pops: Sequence[V.Population]) -> List[str]:
@@ -452,9 +515,10 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
     from the same judging; with html, also DIR/verdicts.html (write_html)"""
     os.makedirs(out, exist_ok=True)
     j = judge_study(folder, B)
+    jb = judge_besteffort(folder, B)
     man, main, supp, res = j.man, j.main, j.supp, j.res
     if readme:
-        write_readme_table(readme, readme_lines(j, B))
+        write_readme_table(readme, readme_lines(j, B, jb))
     alone_claims = [c for c in V.CLAIMS if c.reads_alone]
     readings = {}
     for proto, _ in READINGS:
@@ -483,9 +547,11 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
     if forest(res, os.path.join(out, "forest.png"), f"every claim: estimate and 95% interval over populations\nin "
               f"units of its margin (main text n = {len(main)}, supplement n = {len(supp)})"):
         lines += ["![forest plot](forest.png)", ""]
+    be = {r.claim.id: r for r in jb.res} if jb else {}
+    be_head = (f" best-effort training (M′ n = {len(jb.main)}, S′ n = {len(jb.supp)}) |" if jb else "")
     lines += ["| id | claim | paper | effect [95% interval] · verdict (same episode length) | training length | "
-              "training rate | Holm p: supports / contradicts | t interval | per population |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "training rate | Holm p: supports / contradicts | t interval | per population |" + be_head,
+              "|---|---|---|---|---|---|---|---|---|" + ("---|" if jb else "")]
     for r in [r for r in res if r.claim.family in ("M", "S")]:
         c = r.claim
         extra = []
@@ -496,8 +562,9 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
         tci = f"[{num(r.t_lo)}, {num(r.t_hi)}]" if np.isfinite(r.t_lo) else "—"
         hp = f"{r.p_support_holm:.3g} / {r.p_contra_holm:.3g}" if np.isfinite(r.p_support_holm) else "—"
         lines.append(f"| {c.id} | {c.text} ({c.where}) | {c.paper} | {cell(r)} | {extra[0]} | {extra[1]} | {hp} | "
-                     f"{tci} | {pp or '—'} |")
-    lines += amendment_sections(j, B)
+                     f"{tci} | {pp or '—'} |" + (f" {cell(be[c.id])} |" if jb else ""))
+    lines += amendment_sections(j, B, jb)
+    lines += besteffort_lines(j, jb, B)
     lines += ["", "## Effects and margins", "", "| id | family | effect θ (positive = the paper's direction) | form | "
               "margin |", "|---|---|---|---|---|"]
     for c in V.CLAIMS:
@@ -648,42 +715,72 @@ def readings_page(folder: str, out: str, baseline: str = "baseline", B: int = V.
 README_BEGIN, README_END = "<!-- verdict table -->", "<!-- /verdict table -->"
 
 
-def readme_lines(j: Judged, B: int = V.B_DEFAULT) -> List[str]:
+def _at1000(j: Judged, B: int) -> Dict[str, V.Result]:
+    """the claims that compare with agents alone, judged with agents alone at their training length (1000 steps)"""
+    alone_claims = [c for c in V.CLAIMS if c.reads_alone]
+    return {r.claim.id: r for fam, pops in (("M", j.main), ("S", j.supp))
+            for r in judge_family(pops, fam, "training_length", alone_claims, B=B)}
+
+
+def _effect_text(r: V.Result) -> str:
+    c = r.claim
+    if np.isfinite(r.lo):
+        return f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {c.unit}".rstrip()
+    if np.isfinite(r.estimate):
+        return f"{num(r.estimate)} {c.unit}".rstrip()
+    return "—"
+
+
+def _verdict_text(r: V.Result) -> str:
+    return r.verdict + (f" ({r.reason})" if r.verdict == "not measured" and r.reason else "")
+
+
+def _alone_text(o: Optional[V.Result]) -> str:
+    return (f"{num(o.estimate)} [{num(o.lo)}, {num(o.hi)}] {o.claim.unit}: {o.verdict}".replace(" :", ":")
+            if o is not None and np.isfinite(o.lo) else "")
+
+
+def readme_lines(j: Judged, B: int = V.B_DEFAULT, jb: Optional[Judged] = None) -> List[str]:
     """the README's results: one row per claim (effect, interval, verdict), and for the claims that compare with
-    agents alone also the verdict with agents alone at their training length (1000 steps)"""
+    agents alone also the verdict with agents alone at their training length (1000 steps); with jb, the same for
+    the best-effort confirmation beside them"""
     planned = len(j.planned)
     main, supp, res = j.main, j.supp, j.res
-    alone_claims = [c for c in V.CLAIMS if c.reads_alone]
-    at1000 = {r.claim.id: r for fam, pops in (("M", main), ("S", supp))
-              for r in judge_family(pops, fam, "training_length", alone_claims, B=B)}
-    lines = [f"Main text: {len(main)} of {planned} populations; supplement and Fig. 4: {len(supp)} of 5"
-             + (" (interim: the study is still running, and verdicts can move as populations arrive)."
-                if len(main) < planned or len(supp) < 5 else "."),
-             "Claims that compare with agents alone are judged at the same episode length (3000 steps, the registered "
-             "primary) and, in the last column, with agents alone at their training length (1000 steps): the paper's "
-             "agent numbers (\"almost four\", \"just over two\" BL) are this program's 1000-step values, so that is "
-             "the comparison the paper's figure most plausibly made.", "",
-             "| | claim | paper | effect [95% interval] | verdict | agents alone at 1000 steps |",
-             "|---|---|---|---|---|---|"]
+    at1000 = _at1000(j, B)
+    be = {r.claim.id: r for r in jb.res} if jb else {}
+    be1000 = _at1000(jb, B) if jb else {}
+    lines = [f"Paper-faithful training: main text {len(main)} of {planned} populations; supplement and Fig. 4: "
+             f"{len(supp)} of 5" + (" (interim: the study is still running, and verdicts can move as populations "
+                                    "arrive)." if len(main) < planned or len(supp) < 5 else ".")]
+    if jb:
+        interim = len(jb.main) < len(jb.planned) or len(jb.supp) < 5
+        lines.append(f"Best-effort training (amendment A5): main text {len(jb.main)} of {len(jb.planned)} fresh "
+                     f"populations; supplement {len(jb.supp)} of 5"
+                     + (" (interim: verdicts can move as populations arrive)." if interim else "."))
+    lines += ["Claims that compare with agents alone are judged at the same episode length (3000 steps, the registered "
+              "primary) and with agents alone at their training length (1000 steps): the paper's agent numbers "
+              "(\"almost four\", \"just over two\" BL) are this program's 1000-step values, so that is the "
+              "comparison the paper's figure most plausibly made.", ""]
+    head = "| | claim | paper | effect [95% interval] | verdict | agents alone at 1000 steps |"
+    rule = "|---|---|---|---|---|---|"
+    if jb:
+        head += " best-effort: effect [95% interval] | verdict | agents alone at 1000 steps |"
+        rule += "---|---|---|"
+    lines += [head, rule]
     for r in res:
         c = r.claim
-        if np.isfinite(r.lo):
-            eff = f"{num(r.estimate)} [{num(r.lo)}, {num(r.hi)}] {c.unit}".rstrip()
-        elif np.isfinite(r.estimate):
-            eff = f"{num(r.estimate)} {c.unit}".rstrip()
-        else:
-            eff = "—"
-        vd = r.verdict + (f" ({r.reason})" if r.verdict == "not measured" and r.reason else "")
-        o = at1000.get(c.id)
-        other = (f"{num(o.estimate)} [{num(o.lo)}, {num(o.hi)}] {c.unit}: {o.verdict}".replace(" :", ":")
-                 if o is not None and np.isfinite(o.lo) else "")
-        lines.append(f"| {c.id} | {c.text} | {c.paper} | {eff} | {vd} | {other} |")
+        row = f"| {c.id} | {c.text} | {c.paper} | {_effect_text(r)} | {_verdict_text(r)} | {_alone_text(at1000.get(c.id))} |"
+        if jb:
+            b = be.get(c.id)
+            row += (f" {_effect_text(b)} | {_verdict_text(b)} | {_alone_text(be1000.get(c.id))} |" if b is not None
+                    else " | | |")
+        lines.append(row)
     return lines
 
 
 def readme_table(folder: str, B: int = V.B_DEFAULT) -> List[str]:
-    """readme_lines of a kept verdicts study"""
-    return readme_lines(judge_study(folder, B), B)
+    """readme_lines of a kept verdicts study, with its best-effort confirmation when there is one"""
+    return readme_lines(judge_study(folder, B), B, judge_besteffort(folder, B))
 
 
 def write_readme_table(readme: str, lines: List[str]) -> None:

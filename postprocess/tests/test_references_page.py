@@ -116,6 +116,51 @@ class AmendmentStatistics(unittest.TestCase):
         self.assertEqual(verdict_page.on_threshold([near, far]), [near])
 
 
+class BestEffort(unittest.TestCase):
+    """the best-effort confirmation kept beside a verdicts study (<study>_besteffort): judged by the same rules on
+    its own populations, shown beside the paper-faithful verdicts on the page and in the README table"""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.study = os.path.join(self.tmp.name, "verdicts")
+        rng = np.random.Generator(np.random.PCG64(21))
+        kept_study(self.study, {"baseline": {s: synthetic(s, rng) for s in range(1, 5)}})
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def test_without_a_confirmation_the_page_says_so_and_the_readme_has_one_training(self):
+        with open(verdict_page.write(self.study, os.path.join(self.tmp.name, "page"), B=300)) as fh:
+            text = fh.read()
+        self.assertIn("No kept run of the confirmation yet", text)
+        self.assertNotIn("best-effort", verdict_page.readme_table(self.study, B=300)[-3])
+
+    def test_the_confirmation_is_judged_on_its_own_populations_beside_the_paper_faithful_one(self):
+        rng = np.random.Generator(np.random.PCG64(22))
+        # the best-effort populations: weak diverse pairs far beyond agents alone (C07 turns supported), with
+        # references; seeds of their own
+        runs = {}
+        for s in range(11, 15):
+            a = with_references(synthetic(s, rng, beat=+6.0))
+            runs[s] = a
+        kept_study(verdict_page.besteffort_folder(self.study), {"baseline": runs})
+        jb = verdict_page.judge_besteffort(self.study, B=300)
+        self.assertEqual([p.seed for p in jb.main], [11, 12, 13, 14])
+        j = verdict_page.judge_study(self.study, B=300)
+        self.assertNotEqual(next(r for r in j.res if r.claim.id == "C07").verdict,
+                            next(r for r in jb.res if r.claim.id == "C07").verdict)
+        with open(verdict_page.write(self.study, os.path.join(self.tmp.name, "page"), B=300)) as fh:
+            text = fh.read()
+        self.assertIn("best-effort training (M′ n = 4, S′ n = 0)", text)
+        moved = md_table(text, "| id | claim | paper-faithful | best-effort |")
+        self.assertIn("C07", [r[0] for r in moved])
+        self.assertIn("| 11 |", text)  # the confirmation's reference table, per population
+        rows = {r[0]: r for r in md_table("\n".join(verdict_page.readme_table(self.study, B=300)), "| | claim |")}
+        c07 = next(r for r in jb.res if r.claim.id == "C07")
+        self.assertEqual(rows["C07"][7], c07.verdict)
+        self.assertRegex(rows["C07"][8], r"\]")  # its 1000-step verdict too
+
+
 class ReadmeAndS2(unittest.TestCase):
     def test_the_readme_table_has_the_1000_step_verdict_of_every_claim_that_reads_agents_alone(self):
         rng = np.random.Generator(np.random.PCG64(9))
