@@ -98,6 +98,7 @@ class Candidate:
     keys: List[str]
     eligible: bool
     runs: List[Run]
+    added: str = ""  # the date it joined the study after the selection's runs ("": from the start)
     S: float = float("nan")
     S_follower: float = float("nan")
     cost: float = float("nan")  # pair-episodes per connector
@@ -112,8 +113,11 @@ def candidates(folder: str) -> List[Candidate]:
     out = []
     for v in variants:
         keys = list(v.get("set", []))
-        elig = not any(k.split("=")[0].strip() in MODEL_KEYS for k in keys)
-        c = Candidate(v["name"], v.get("doc", ""), keys, elig, sorted(runs.get(v["name"], []), key=lambda r: r.seed))
+        # A5: a variant with `added` joined after the choice was made, so it is reported and never chosen
+        added = v.get("added", "")
+        elig = not added and not any(k.split("=")[0].strip() in MODEL_KEYS for k in keys)
+        c = Candidate(v["name"], v.get("doc", ""), keys, elig, sorted(runs.get(v["name"], []), key=lambda r: r.seed),
+                      added)
         cells = c.cells()
         if cells:
             c.S = float(np.mean([x["share_alone"] for x in cells.values()]))
@@ -122,6 +126,13 @@ def candidates(folder: str) -> List[Candidate]:
             c.wall_s = float(np.nanmean([r.arrays.get("connectors", {}).get("wall_s", np.nan) for r in c.runs]))
         out.append(c)
     return out
+
+
+def eligibility(c: Candidate) -> str:
+    """the table's word: yes, reading (changes the model), or the date a candidate was added after the choice"""
+    if c.added:
+        return f"added {c.added}, reported only"
+    return "yes" if c.eligible else "reading"
 
 
 def select(cands: Sequence[Candidate], seeds: Sequence[int]) -> Optional[Candidate]:
@@ -197,12 +208,12 @@ def write(folder: str, out: str) -> str:
               "pair-episodes | wall s | keys |", "|---|---|---|---|---|---|---|---|"]
     for c in cands:
         if not c.runs:
-            lines.append(f"| {c.name} | {'yes' if c.eligible else 'reading'} | not run yet | | | | | "
+            lines.append(f"| {c.name} | {eligibility(c)} | not run yet | | | | | "
                          f"{', '.join(f'`{k}`' for k in c.keys) or 'defaults'} |")
             continue
         per = "; ".join(f"{s}/{k.split('_')[1][0]}: {v['travel']:.2f} ({v['share_alone']:.0%})"
                         for (s, k), v in sorted(c.cells().items()))
-        lines.append(f"| {c.name} | {'yes' if c.eligible else 'reading'} | {c.S:.3f} | {c.S_follower:.2f} | {per} | "
+        lines.append(f"| {c.name} | {eligibility(c)} | {c.S:.3f} | {c.S_follower:.2f} | {per} | "
                      f"{c.cost:,.0f} | {c.wall_s:.0f} | {', '.join(f'`{k}`' for k in c.keys) or 'defaults'} |")
     ref_rows = {}
     for c in done:

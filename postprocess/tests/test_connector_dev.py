@@ -30,13 +30,14 @@ def summary(cfg):
     return {"format": "divcoll-run-summary", "git_commit": "synthetic", "config": {"connectors": cfg}}
 
 
-def kept(d, variants):
-    """variants: [(name, set, {seed: (wu, wd)}, connectors config)]"""
+def kept(d, variants, added=None):
+    """variants: [(name, set, {seed: (wu, wd)}, connectors config)]; added: {name: date} of late variants"""
     runs = []
     with open(os.path.join(d, "study.toml"), "w") as fh:
         fh.write('format = "divcoll-study"\nname = "dev"\n')
         for name, keys, by_seed, cfg in variants:
-            fh.write(f'[[variant]]\nname = "{name}"\nset = {json.dumps(keys)}\n')
+            fh.write(f'[[variant]]\nname = "{name}"\nset = {json.dumps(keys)}\n'
+                     + (f'added = "{added[name]}"\n' if added and name in added else ""))
             os.makedirs(os.path.join(d, name), exist_ok=True)
             for seed, (wu, wd) in by_seed.items():
                 with open(os.path.join(d, name, f"seed{seed}.arrays.json"), "w") as a:
@@ -74,6 +75,18 @@ class Selection(unittest.TestCase):
                 page = fh.read()
         self.assertIn("**paper**", page)
         self.assertIn("| stiff | reading |", page)
+
+    def test_a_candidate_added_after_the_choice_is_reported_and_never_chosen(self):
+        with tempfile.TemporaryDirectory() as d:
+            kept(d, [("paper", [], {101: (5.0, 4.0), 102: (5.0, 4.0)}, PLAIN),
+                     ("late", ["connectors.lr=0.01"], {101: (9.5, 9.5), 102: (9.5, 9.5)}, PLAIN)],
+                 added={"late": "2026-12-06"})
+            c = {x.name: x for x in D.candidates(d)}
+            self.assertFalse(c["late"].eligible)
+            self.assertEqual(D.select(list(c.values()), [101, 102]).name, "paper")
+            with open(D.write(d, os.path.join(d, "page"))) as fh:
+                page = fh.read()
+        self.assertIn("| late | added 2026-12-06, reported only |", page)
 
 
 if __name__ == "__main__":

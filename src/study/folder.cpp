@@ -160,6 +160,7 @@ std::string manifest_text(const Study& s, const std::vector<PlannedRun>& runs, c
     vt.set("doc", TomlValue::of(v.doc));
     vt.set("set", TomlValue::list(v.set));
     if (!v.seeds.empty()) vt.set("seeds", seed_values(v.seeds));
+    if (!v.added.empty()) vt.set("added", TomlValue::of(v.added));
     vars.push_back(std::move(vt));
   }
   for (size_t i = 0; i < runs.size(); ++i) list.push_back(run_table(s, runs, i, st[i]));

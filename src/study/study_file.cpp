@@ -73,8 +73,13 @@ Variant read_variant(const TomlValue& n, const std::string& path, const Study& s
     else if (key == "doc") v.doc = text_of(val, "variant.doc");
     else if (key == "set") v.set = strings(val, "variant.set");
     else if (key == "seeds") v.seeds = seed_list(val, "variant.seeds", "a non-empty list of the study's seeds");
-    else throw InputError(msg() << "unknown key variant." << key << " in " << path << " (known: name, set, seeds, doc)");
+    else if (key == "added") v.added = text_of(val, "variant.added");
+    else throw InputError(msg() << "unknown key variant." << key << " in " << path
+                                << " (known: name, set, seeds, doc, added)");
   }
+  static const std::regex iso_date("[0-9]{4}-(0[1-9]|1[0-2])-(0[1-9]|[12][0-9]|3[01])");
+  DIVCOLL_THROW_UNLESS(v.added.empty() || std::regex_match(v.added, iso_date),
+                       "variant " << v.name << ": added = '" << v.added << "' is not a date YYYY-MM-DD");
   DIVCOLL_THROW_UNLESS(std::regex_match(v.name, ok_name),
                        "variant name '" << v.name << "' must be letters, digits, _ or - (it names a folder)");
   for (const Variant& o : s.variants) DIVCOLL_THROW_UNLESS(o.name != v.name, "variant " << v.name << " is listed twice");

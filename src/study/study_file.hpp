@@ -10,6 +10,8 @@
 //   set  = []                      section.key=value overrides of this variant
 //   doc  = "..."                   optional: the reading of the paper it stands for
 //   seeds = [1, 2]                 optional: run this variant at these study seeds only (default: every one)
+//   added = "2026-12-06"           optional: the date a variant joined the study after its first runs (kept in
+//                                  the manifest; a pre-registered selection reports such a variant, never picks it)
 #pragma once
 
 #include <cstdint>
@@ -22,6 +24,7 @@ struct Variant {
   std::string name, doc;
   std::vector<std::string> set;
   std::vector<std::uint64_t> seeds;  // the study seeds this variant runs at (empty: every one)
+  std::string added;                 // YYYY-MM-DD: joined the study after its first run ("": from the start)
 };
 
 struct Study {

@@ -83,6 +83,9 @@ TEST_F(StudyFolder, TheManifestReadsBackWhatWasWritten) {
   EXPECT_NE(text.find("status = 'complete'"), std::string::npos) << text;
   EXPECT_NE(text.find("[[run]]"), std::string::npos) << text;
   EXPECT_NE(text.find("[[variant]]"), std::string::npos) << text;
+  EXPECT_EQ(text.find("added"), std::string::npos) << text;  // no variant joined late
+  p.s.variants[1].added = "2026-12-06";
+  EXPECT_NE(manifest_text(p.s, p.runs, p.st).find("added = '2026-12-06'"), std::string::npos);
 }
 
 TEST_F(StudyFolder, ARunAnotherJobCompletedStaysComplete) {

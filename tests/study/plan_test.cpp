@@ -20,7 +20,7 @@ Study tiny_study(const std::vector<std::pair<std::string, std::vector<std::strin
   s.seeds = {1, 2};
   s.scale = {"run.stages=[\"agents\",\"connectors\",\"deploy\",\"analysis\"]",
              "connectors.kinds=[\"weak_uniform\",\"weak_diverse\"]"};
-  for (const auto& [name, set] : variants) s.variants.push_back({name, "", set, {}});
+  for (const auto& [name, set] : variants) s.variants.push_back({name, "", set, {}, ""});
   return s;
 }
 

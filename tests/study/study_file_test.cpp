@@ -33,7 +33,7 @@ std::string refusal(const std::string& t) {
 TEST(StudyFile, ReadsEveryKey) {
   const Study s = parse_study_text(text("name = \"n\"\ndoc = \"d\"\nscale = [\"deploy.pairs=2\"]",
                                         "[[variant]]\nname = \"a\"\ndoc = \"x\"\nset = [\"agents.epochs=2\"]\n"
-                                        "[[variant]]\nname = \"b-2\"\nseeds = [2]\n"),
+                                        "[[variant]]\nname = \"b-2\"\nseeds = [2]\nadded = \"2026-12-06\"\n"),
                                    kPath);
   EXPECT_EQ(s.name, "n");
   EXPECT_EQ(s.doc, "d");
@@ -47,6 +47,8 @@ TEST(StudyFile, ReadsEveryKey) {
   EXPECT_EQ(s.variants[0].set, std::vector<std::string>{"agents.epochs=2"});
   EXPECT_TRUE(s.variants[0].seeds.empty());
   EXPECT_EQ(s.variants[1].seeds, std::vector<std::uint64_t>{2});
+  EXPECT_EQ(s.variants[0].added, "");
+  EXPECT_EQ(s.variants[1].added, "2026-12-06");
 }
 
 TEST(StudyFile, NameDefaultsToTheFileStemAndBaseIsRelativeToTheFile) {
@@ -74,7 +76,7 @@ TEST(StudyFile, RefusesUnknownTablesAndKeys) {
   EXPECT_EQ(refusal(text("repeats = 3")),
             "unknown key study.repeats in " + kPath + " (known: name, base, seeds, scale, doc)");
   EXPECT_EQ(refusal(text("", "[[variant]]\nname = \"a\"\nsets = []\n")),
-            "unknown key variant.sets in " + kPath + " (known: name, set, seeds, doc)");
+            "unknown key variant.sets in " + kPath + " (known: name, set, seeds, doc, added)");
 }
 
 TEST(StudyFile, RefusesMissingParts) {
@@ -109,6 +111,8 @@ TEST(StudyFile, RefusesBadVariants) {
   EXPECT_EQ(refusal(text("", "[[variant]]\nname = \"a\"\nseeds = []\n")),
             "variant.seeds must be a non-empty list of the study's seeds");
   EXPECT_EQ(refusal("variant = [1]\n" + text("", "")), "every variant must be a [[variant]] table");
+  EXPECT_EQ(refusal(text("", "[[variant]]\nname = \"a\"\nadded = \"6 Dec\"\n")),
+            "variant a: added = '6 Dec' is not a date YYYY-MM-DD");
 }
 
 }  // namespace
