@@ -106,8 +106,9 @@ std::vector<Entry> base_entries() {
     return Entry{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
   };
   // written only with connectors.keep_best / optimizer = cmaes ... (src/stages/connectors.cpp)
-  const auto O = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc) {
-    Entry e{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", false};
+  const auto O = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc,
+                    bool graded = false) {
+    Entry e{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
     e.optional = true;
     return e;
   };
@@ -158,15 +159,16 @@ std::vector<Entry> base_entries() {
         "pairs of the batch whose episode was not ok or whose gradient was not finite (left out of the mean and the "
         "step)", true),
       O("connectors/{kind}/val_bl", "float64", "iteration,replicate", "BL",
-        "keep_best: mean validation travel of the weights before each step, then (row I) of the final weights"),
-      O("connectors/{kind}/best_iteration", "float64", "replicate", "index", "keep_best: the row of val_bl whose weights were kept"),
+        "keep_best: mean validation travel of the weights before each step, then (row I) of the final weights", true),
+      O("connectors/{kind}/best_iteration", "float64", "replicate", "index",
+        "keep_best: the row of val_bl whose weights were kept", true),
       G("connectors/state", "", "the optimizer at the last checkpoint (resume)", true),
       D("connectors/state/params", "float64", "connector,connector_weight", "1", "weights", true),
       D("connectors/state/adam_m", "float64", "connector,connector_weight", "1", "Adam's first moment", true),
       D("connectors/state/adam_v", "float64", "connector,connector_weight", "1", "Adam's second moment", true),
-      O("connectors/state/best_params", "float64", "connector,connector_weight", "1", "the validation-best weights (optimisation keys)"),
-      O("connectors/state/best", "float64", "connector,best", "1", "keep-best score and iteration (optimisation keys)"),
-      O("connectors/state/es_fitness", "float64", "connector,es_candidate", "u", "cmaes: −batch travel of every candidate so far (replayed on resume)"),
+      O("connectors/state/best_params", "float64", "connector,connector_weight", "1", "the validation-best weights (optimisation keys)", true),
+      O("connectors/state/best", "float64", "connector,best", "1", "keep-best score and iteration (optimisation keys)", true),
+      O("connectors/state/es_fitness", "float64", "connector,es_candidate", "u", "cmaes: −batch travel of every candidate so far (replayed on resume)", true),
       // deploy (SPEC §7.1–7.2)
       G("deploy", "status,environments,types,references,envs_done," + kTiming,
         "the deployment: every agent alone and the eight collective types in every environment, no learning"),
@@ -266,7 +268,7 @@ std::vector<Entry> base_entries() {
       G("analysis/familiarity/{type}", "", "one deployment type"),
       D("analysis/familiarity/{type}/counts", "int64", "novel_env,replicate,count", "count",
         "states and cells by what the cells hold"),
-      D("analysis/familiarity/{type}/counts_calibrated", "int64", "novel_env,replicate,count", "count",
+      O("analysis/familiarity/{type}/counts_calibrated", "int64", "novel_env,replicate,count", "count",
         "counts as above at analysis.calibrated_cell_scale (when > 0)"),
       D("analysis/familiarity/{type}/n_states", "int64", "novel_env,replicate,source", "count", "states in the fit"),
       D("analysis/familiarity/{type}/embedding", "float32", "novel_env,replicate,state,component", "1",

@@ -44,6 +44,8 @@ TEST(RunFileSchema, LookupByPathPrefersTheLiteralRow) {
       {"graded/same_shape/agents/final/cells", "graded/{population}/agents/{generation}/cells"},
       {"graded/same_shape/connectors/state/adam_v", "graded/{population}/connectors/state/adam_v"},
       {"graded/same_shape/deploy/pairs/status", "graded/{population}/deploy/pairs/status"},
+      // a graded population's connectors train as the main ones, keep-best's rows included
+      {"graded/same_shape/connectors/weak_diverse/val_bl", "graded/{population}/connectors/{kind}/val_bl"},
       {"", ""},
       {"deploy/collectives/travel", "(none)"},
       {"scaling/m20/diverse_agents", "(none)"},  // n{N} needs its prefix
