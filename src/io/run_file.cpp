@@ -105,10 +105,11 @@ std::vector<Entry> base_entries() {
                     bool graded = false) {
     return Entry{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
   };
-  // written only with connectors.keep_best / optimizer = cmaes ... (src/stages/connectors.cpp)
-  const auto O = [](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc,
-                    bool graded = false) {
-    Entry e{std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), "", graded};
+  // a dataset written only under some settings (connectors.keep_best, optimizer = cmaes, deploy.references,
+  // analysis.calibrated_cell_scale, ...)
+  const auto O = [&D](std::string path, std::string dtype, std::string axes, std::string unit, std::string doc,
+                      bool graded = false) {
+    Entry e = D(std::move(path), std::move(dtype), std::move(axes), std::move(unit), std::move(doc), graded);
     e.optional = true;
     return e;
   };
