@@ -31,8 +31,8 @@ WU, WD = "weak_uniform@uniform", "weak_diverse@diverse"
 SEVERE = 0.25  # "severe": a relative drop of more than a quarter (protocol §5)
 
 
-from .reader import complete, list_attr, open_file, text as _s  # noqa: E402
-from .results import ok_means  # noqa: E402
+from ..reader import complete, list_attr, open_file, text as _s  # noqa: E402
+from ..results import ok_means  # noqa: E402
 
 
 def _lists(a):
@@ -656,7 +656,7 @@ def d_vs_alone_novel(p, pr):
 
 
 def _welch(p, which):
-    from .analysis import stars, welch
+    from ..analysis import stars, welch
     a = p.a["analysis"]["dtw"]
     pv = welch(a[WU][which], a[WD][which])[2]
     return f"Welch p = {g3(pv)} ({stars(pv)})"
