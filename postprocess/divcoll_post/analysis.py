@@ -1,5 +1,5 @@
 """Read-only access to the analysis stage of a divcoll run file (SPEC §8: DTW adversity, PaCMAP familiarity)
-and the Python side of its statistics. Used by fig3.py, table_s1.py, summary.py and verdicts.py.
+and the Python side of its statistics. Used by fig3.py, table_s1.py, summary.py and verdicts/describe.py.
 
 Layout read here (src/stages/analysis.hpp):
 

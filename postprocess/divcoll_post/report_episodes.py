@@ -145,9 +145,10 @@ class Episodes:
         return f"{label}: " + " · ".join(got) if got else ""
 
     def claim_cell(self, claim, number):
-        """the claims table's episodes cell of a registry claim (verdicts.Claim: its `episodes` plan) whose number
-        text is `number` (Markdown)"""
-        note, alone, types, where = claim.episodes
+        """the claims table's episodes cell of a registry claim (verdicts.Claim: its `episodes`, a verdicts.Episodes)
+        whose number text is `number` (Markdown)"""
+        ep = claim.episodes
+        note, alone, types, where = ep.note, ep.alone, ep.types, ep.envs
         novel = [e for e in self.envs if e != "flat"]
         scope = {"flat": ["flat"], "novel": novel, "all": self.envs, "wind": ["flat", "wind"], "none": [],
                  "specialists": self.spec_envs, "chains": []}

@@ -1,5 +1,5 @@
 """The robustness page of a study folder (`divcoll study STUDY.toml --out DIR`): the pre-registered claims
-(divcoll_post/verdicts.py's CLAIMS) × the study's variants, each cell the claim's effect with a 95% confidence interval
+(divcoll_post.verdicts.CLAIMS) × the study's variants, each cell the claim's effect with a 95% confidence interval
 over seeds and a verdict, and the paper's Fig. 2A per variant with error bars over seeds.
 
     PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.robustness DIR [--out OUT]   (what `divcoll report DIR` runs)

@@ -197,7 +197,7 @@ class EndToEnd(unittest.TestCase):
         self.assertEqual(len(rows), len(V.CLAIMS))
         unlinked = [r for r in rows if 'href="#ep-' not in r]
         # only the claims whose episodes are not exported (connector-training batches, generation 0's training)
-        no_links = [c for c in V.CLAIMS if c.episodes[3] == "none"]
+        no_links = [c for c in V.CLAIMS if c.episodes.envs == "none"]
         self.assertEqual(len(unlinked), len(no_links), [r[:80] for r in unlinked])
         for r in unlinked:
             self.assertIn("are not exported", r)

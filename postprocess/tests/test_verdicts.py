@@ -1,4 +1,4 @@
-"""The protocol's estimator (divcoll_post/verdicts.py) on synthetic populations with known effects, and the verdict
+"""The protocol's estimator (divcoll_post/verdicts/) on synthetic populations with known effects, and the verdict
 page recomputed from kept arrays (postprocess/gallery/studies/verdicts)."""
 import contextlib
 import html
