@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README command 1: install what is missing (build and runtime packages only), build, run the pipeline at the
-# quick preset on every core, write its report (report.md, report.html, figures, the Supplementary Movie) and
-# the demo. One line per step; the long outputs go to out/logs/. Rerunning starts the quick run over.
+# quick preset on every core, write its report (report.md, report.html, figures, the movie of a uniform and a
+# diverse pair) and the demo. The Supplementary Movie is one command more (it doubles the report's time):
+#   build/divcoll report out/quick.h5 --out out/report --movie One line per step; the long outputs go to out/logs/. Rerunning starts the quick run over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p out/logs
@@ -37,12 +38,13 @@ set -e
 [ "$rc" -eq 0 ] || fail "run (exit $rc)" out/logs/run.log
 
 # the demo runs beside the report (each mostly one core; the report's movie clips share the cores too)
-say "report: out/report/report.html and report.md, figures, movies (output: out/logs/report.log)"
+say "report: out/report/report.html and report.md, figures, a movie (output: out/logs/report.log)"
 build/divcoll demo --run out/quick.h5 --out out/demo --movie >out/logs/demo.log 2>&1 &
 demo_pid=$!
-build/divcoll report out/quick.h5 --out out/report --movie >out/logs/report.log 2>&1 || fail "report" out/logs/report.log
+build/divcoll report out/quick.h5 --out out/report >out/logs/report.log 2>&1 || fail "report" out/logs/report.log
 grep -E "^(divcoll: Python|report: wrote)" out/logs/report.log | cut -c1-116
 say "demo: the run's trained agents and connector, walking (out/demo/demo.mp4)"
 wait "$demo_pid" || fail "demo" out/logs/demo.log
 grep -A2 '^environment' out/logs/demo.log | cut -c1-116
 say "done. Open out/report/report.html in a browser; the run file is out/quick.h5."
+say "the Supplementary Movie (1-2 min more): build/divcoll report out/quick.h5 --out out/report --movie"

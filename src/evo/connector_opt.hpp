@@ -36,20 +36,20 @@
 
 namespace divcoll::collective {
 
-// the [connectors] keys the optimizer reads, taken from the section by opt_settings; a test or a command may also
-// set them directly
+// the [connectors] keys the optimizer reads, taken from the section by opt_settings (the config's schema holds
+// their defaults: opt_settings(io::default_config().connectors)); a test or a command may then change them
 struct OptSettings {
-  std::string optimizer = "adam";  // adam | normalized | cmaes | es
-  double lr = 0.003, clip_norm = 1.0;
-  std::string lr_schedule = "constant";  // constant | cosine | exponential
-  double lr_final = 0.1;                 // fraction of lr at the last iteration
-  int bptt_window = 0;                   // steps, 0 = full backpropagation
-  int grad_samples = 1;                  // gradients averaged per step
-  double grad_sigma = 0.01;              // sd of their weight perturbations
-  bool keep_best = false;                // return the validation-best weights
-  int es_popsize = 16;                   // cmaes / es candidates per iteration
-  double es_sigma = 0.02;                // cmaes initial sd per weight; es perturbation sd per weight
-  std::string clip = "global";           // global | per_pair: clip_norm clips the batch mean or each pair's gradient
+  std::string optimizer;    // adam | normalized | cmaes | es
+  double lr{}, clip_norm{};
+  std::string lr_schedule;  // constant | cosine | exponential
+  double lr_final{};        // fraction of lr at the last iteration
+  int bptt_window{};        // steps, 0 = full backpropagation
+  int grad_samples{};       // gradients averaged per step
+  double grad_sigma{};      // sd of their weight perturbations
+  bool keep_best{};         // return the validation-best weights
+  int es_popsize{};         // cmaes / es candidates per iteration
+  double es_sigma{};        // cmaes initial sd per weight; es perturbation sd per weight
+  std::string clip;         // global | per_pair: clip_norm clips the batch mean or each pair's gradient
 };
 inline OptSettings opt_settings(const io::RunConfig::Connectors& c) {
   return {c.optimizer,    c.lr,          c.clip_norm, c.lr_schedule, c.lr_final,  c.bptt_window,

@@ -12,14 +12,19 @@
 
 namespace divcoll::evo {
 
+// the [agents] keys mutation reads, taken from the section by mutation_options (defaults: the config's schema,
+// mutation_options(io::default_config().agents))
 struct MutationOptions {
-  double body_flip_p = 1.0 / 28;
-  double spring_flip_p = 1.0 / 21;
-  double rest_jitter_sd = 0.005;  // u
-  bool body_fixed = false;        // graded diversity: the body genotype never mutates
-  bool springs_fixed = false;     // graded diversity: the spring genotype never mutates
-  bool rest_moves = true;         // rest positions are jittered (and trained)
+  double body_flip_p{};
+  double spring_flip_p{};
+  double rest_jitter_sd{};  // u
+  bool body_fixed{};        // graded diversity: the body genotype never mutates
+  bool springs_fixed{};     // graded diversity: the spring genotype never mutates
+  bool rest_moves{};        // rest positions are jittered (and trained)
 };
+inline MutationOptions mutation_options(const io::RunConfig::Agents& a) {
+  return {a.body_flip_p, a.spring_flip_p, a.rest_jitter_sd, a.body_fixed, a.springs_fixed, a.rest_moves};
+}
 
 // one member of a generation's pool
 struct Individual {

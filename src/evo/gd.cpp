@@ -11,6 +11,11 @@
 
 namespace divcoll::evo {
 
+GdOptions gd_options(const io::RunConfig::Agents& a) {
+  return {a.epochs,         a.episode_steps, gd_rule_from(a.gd_rule), a.gd_step,        a.adam_lr,
+          a.rest_moves,     a.rest_move_max, a.rest_length_min,        a.rest_length_max};
+}
+
 GdRule gd_rule_from(const std::string& name) {
   if (name == "paper") return GdRule::paper;
   if (name == "keep_best") return GdRule::keep_best;

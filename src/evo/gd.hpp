@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "config/config.hpp"
 #include "morph/agent.hpp"
 #include "evo/optim.hpp"
 #include "sim/engine.hpp"
@@ -20,17 +21,20 @@ enum class GdRule {
 GdRule gd_rule_from(const std::string& name);  // "paper", "keep_best", "adam"; InputError otherwise
 const char* gd_rule_name(GdRule r);
 
+// the [agents] keys gradient descent reads, taken from the section by gd_options (the config's schema holds their
+// defaults: gd_options(io::default_config().agents)); a test or a command may then change them
 struct GdOptions {
-  int epochs = 15;                 // gradient evaluations and updates
-  int steps = 1000;                // steps per episode on flat ground
-  GdRule rule = GdRule::keep_best;
-  double step = 0.16;              // normalized step of the weights
-  double adam_lr = 0.01;
-  bool rest_moves = true;          // whether rest positions are trained
-  double rest_move_max = 0.002;    // u, largest move of any mass per epoch
-  double rest_length_min = 0.5;    // × morph::kSpacing (0.05 u)
-  double rest_length_max = 1.5;    // × morph::kSpacing
+  int epochs{};                    // gradient evaluations and updates
+  int steps{};                     // steps per episode on flat ground
+  GdRule rule{};
+  double step{};                   // normalized step of the weights
+  double adam_lr{};
+  bool rest_moves{};               // whether rest positions are trained
+  double rest_move_max{};          // u, largest move of any mass per epoch
+  double rest_length_min{};        // × morph::kSpacing (0.05 u)
+  double rest_length_max{};        // × morph::kSpacing
 };
+GdOptions gd_options(const io::RunConfig::Agents& a);
 
 struct TrainResult {
   double travel_u = 0;             // travel of the kept parameters, u

@@ -21,6 +21,9 @@ namespace divcoll::io::h5 {
 
 using Dims = std::vector<hsize_t>;
 
+// a C++ size as an HDF5 extent
+inline hsize_t extent(size_t n) { return static_cast<hsize_t>(n); }
+
 // "(3, 11)"
 std::string dims_string(const Dims& d);
 

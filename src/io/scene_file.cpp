@@ -33,8 +33,6 @@ const DoubleKey kConstants[] = {
     {"eps_len", &sim::Constants::eps_len},
 };
 
-hsize_t h(size_t n) { return static_cast<hsize_t>(n); }
-
 // an integer attribute that must fit an int
 int read_int32(const h5::Node& n, const std::string& attr) {
   const int64_t v = n.read_int(attr);
@@ -86,26 +84,26 @@ sim::Scene read_scene(const std::string& path) {
 
   // masses and springs
   const size_t N = length_of(f, "masses/m", "N");
-  s.mass = f.read<double>("masses/m", Dims{h(N)});
-  s.x0 = f.read<double>("masses/x0", Dims{h(N), 2});
+  s.mass = f.read<double>("masses/m", Dims{h5::extent(N)});
+  s.x0 = f.read<double>("masses/x0", Dims{h5::extent(N), 2});
   const size_t S = length_of(f, "springs/i", "S");
-  s.spring_i = f.read<int32_t>("springs/i", Dims{h(S)});
-  s.spring_j = f.read<int32_t>("springs/j", Dims{h(S)});
-  s.rest_length = f.read<double>("springs/rest_length", Dims{h(S)});
-  s.stiffness = f.read<double>("springs/stiffness", Dims{h(S)});
-  s.amplitude = f.read<double>("springs/amplitude", Dims{h(S)});
-  s.damping = f.read<double>("springs/damping", Dims{h(S)});
+  s.spring_i = f.read<int32_t>("springs/i", Dims{h5::extent(S)});
+  s.spring_j = f.read<int32_t>("springs/j", Dims{h5::extent(S)});
+  s.rest_length = f.read<double>("springs/rest_length", Dims{h5::extent(S)});
+  s.stiffness = f.read<double>("springs/stiffness", Dims{h5::extent(S)});
+  s.amplitude = f.read<double>("springs/amplitude", Dims{h5::extent(S)});
+  s.damping = f.read<double>("springs/damping", Dims{h5::extent(S)});
 
   // agents and connectors
   const size_t A = rows_of(f, "agents/mass_index", sim::kAgentMasses, "A");
-  s.agent_mass_index = f.read<int32_t>("agents/mass_index", Dims{h(A), sim::kAgentMasses});
-  s.agent_spring_index = f.read<int32_t>("agents/spring_index", Dims{h(A), sim::kAgentSprings});
+  s.agent_mass_index = f.read<int32_t>("agents/mass_index", Dims{h5::extent(A), sim::kAgentMasses});
+  s.agent_spring_index = f.read<int32_t>("agents/spring_index", Dims{h5::extent(A), sim::kAgentSprings});
   const hsize_t Pa = static_cast<hsize_t>(sim::agent_param_count(s.constants));
-  s.agent_params = f.read<double>("agents/params", Dims{h(A), Pa});
+  s.agent_params = f.read<double>("agents/params", Dims{h5::extent(A), Pa});
   const size_t C = rows_of(f, "connectors/spring_index", sim::kConnectorSprings, "C");
-  s.connector_spring_index = f.read<int32_t>("connectors/spring_index", Dims{h(C), sim::kConnectorSprings});
+  s.connector_spring_index = f.read<int32_t>("connectors/spring_index", Dims{h5::extent(C), sim::kConnectorSprings});
   if (C > 0) {
-    s.connector_params = f.read<double>("connector_params", Dims{h(sim::connector_param_count())});
+    s.connector_params = f.read<double>("connector_params", Dims{h5::extent(sim::connector_param_count())});
   } else {
     DIVCOLL_THROW_UNLESS(
         !f.has("connector_params"),
@@ -133,7 +131,7 @@ sim::Scene read_scene(const std::string& path) {
                          path << ": attribute 'contact' of env is \"" << law << "\", not a contact law (coulomb, no_slip)");
   }
   const size_t K = rows_of(f, "env/terrain", 3, "K");
-  const std::vector<double> terrain = f.read<double>("env/terrain", Dims{h(K), 3});
+  const std::vector<double> terrain = f.read<double>("env/terrain", Dims{h5::extent(K), 3});
   s.env.terrain.resize(K);
   for (size_t k = 0; k < K; ++k) s.env.terrain[k] = {terrain[3 * k], terrain[3 * k + 1], terrain[3 * k + 2]};
 
@@ -157,23 +155,23 @@ void write_scene_to(h5::File& f, const sim::Scene& s) {
 
   // masses and springs
   const size_t N = s.mass.size(), S = s.spring_i.size();
-  f.write("masses/x0", s.x0, Dims{h(N), 2});
-  f.write("masses/m", s.mass, Dims{h(N)});
-  f.write("springs/i", s.spring_i, Dims{h(S)});
-  f.write("springs/j", s.spring_j, Dims{h(S)});
-  f.write("springs/rest_length", s.rest_length, Dims{h(S)});
-  f.write("springs/stiffness", s.stiffness, Dims{h(S)});
-  f.write("springs/amplitude", s.amplitude, Dims{h(S)});
-  f.write("springs/damping", s.damping, Dims{h(S)});
+  f.write("masses/x0", s.x0, Dims{h5::extent(N), 2});
+  f.write("masses/m", s.mass, Dims{h5::extent(N)});
+  f.write("springs/i", s.spring_i, Dims{h5::extent(S)});
+  f.write("springs/j", s.spring_j, Dims{h5::extent(S)});
+  f.write("springs/rest_length", s.rest_length, Dims{h5::extent(S)});
+  f.write("springs/stiffness", s.stiffness, Dims{h5::extent(S)});
+  f.write("springs/amplitude", s.amplitude, Dims{h5::extent(S)});
+  f.write("springs/damping", s.damping, Dims{h5::extent(S)});
 
   // agents and connectors
   const size_t A = static_cast<size_t>(s.n_agents()), C = static_cast<size_t>(s.n_connectors());
-  f.write("agents/mass_index", s.agent_mass_index, Dims{h(A), sim::kAgentMasses});
-  f.write("agents/spring_index", s.agent_spring_index, Dims{h(A), sim::kAgentSprings});
+  f.write("agents/mass_index", s.agent_mass_index, Dims{h5::extent(A), sim::kAgentMasses});
+  f.write("agents/spring_index", s.agent_spring_index, Dims{h5::extent(A), sim::kAgentSprings});
   f.write("agents/params", s.agent_params,
-          Dims{h(A), static_cast<hsize_t>(sim::agent_param_count(s.constants))});
-  f.write("connectors/spring_index", s.connector_spring_index, Dims{h(C), sim::kConnectorSprings});
-  if (C > 0) f.write("connector_params", s.connector_params, Dims{h(s.connector_params.size())});
+          Dims{h5::extent(A), static_cast<hsize_t>(sim::agent_param_count(s.constants))});
+  f.write("connectors/spring_index", s.connector_spring_index, Dims{h5::extent(C), sim::kConnectorSprings});
+  if (C > 0) f.write("connector_params", s.connector_params, Dims{h5::extent(s.connector_params.size())});
 
   // environment
   const h5::Node env = f.create_group("env");
@@ -187,7 +185,7 @@ void write_scene_to(h5::File& f, const sim::Scene& s) {
     terrain[3 * k + 1] = s.env.terrain[k].y_start;
     terrain[3 * k + 2] = s.env.terrain[k].slope;
   }
-  env.write("terrain", terrain, Dims{h(K), 3});
+  env.write("terrain", terrain, Dims{h5::extent(K), 3});
 }
 
 }  // namespace

@@ -13,8 +13,6 @@ namespace {
 
 using h5::Dims;
 
-hsize_t h(size_t n) { return static_cast<hsize_t>(n); }
-
 // shape checks of an in-memory trajectory before writing
 void check_shapes(const std::string& path, const Trajectory& t) {
   const std::string w = "cannot write " + path + ": ";
@@ -55,7 +53,7 @@ void write_trajectory(const std::string& path, const Trajectory& t, bool overwri
   check_shapes(path, t);
   h5::File f = h5::File::create(path, overwrite);
   try {
-    const hsize_t rows = h(static_cast<size_t>(t.steps) + 1), N = h(static_cast<size_t>(t.n_masses));
+    const hsize_t rows = h5::extent(static_cast<size_t>(t.steps) + 1), N = h5::extent(static_cast<size_t>(t.n_masses));
     f.write("x", t.x, Dims{rows, N, 2});
     f.write("v", t.v, Dims{rows, N, 2});
     f.write("touch", t.touch, Dims{rows, N});
@@ -65,11 +63,11 @@ void write_trajectory(const std::string& path, const Trajectory& t, bool overwri
     if (t.has_grad) {
       const size_t A = static_cast<size_t>(t.n_agents);
       const size_t Pa = A > 0 ? t.grad_agent_params.size() / A : 0;
-      f.write("grad/agent_params", t.grad_agent_params, Dims{h(A), h(Pa)});
+      f.write("grad/agent_params", t.grad_agent_params, Dims{h5::extent(A), h5::extent(Pa)});
       if (!t.grad_connector_params.empty())
-        f.write("grad/connector_params", t.grad_connector_params, Dims{h(t.grad_connector_params.size())});
+        f.write("grad/connector_params", t.grad_connector_params, Dims{h5::extent(t.grad_connector_params.size())});
       f.write("grad/x0", t.grad_x0, Dims{N, 2});
-      f.write("grad/rest_length", t.grad_rest_length, Dims{h(t.grad_rest_length.size())});
+      f.write("grad/rest_length", t.grad_rest_length, Dims{h5::extent(t.grad_rest_length.size())});
     }
     f.close();
   } catch (...) {
@@ -120,11 +118,11 @@ Trajectory read_trajectory(const std::string& path) {
     t.grad_agent_params = f.read<double>("grad/agent_params", da);
     if (f.has("grad/connector_params")) {
       const size_t pc = length_of(f, "grad/connector_params");
-      t.grad_connector_params = f.read<double>("grad/connector_params", Dims{h(pc)});
+      t.grad_connector_params = f.read<double>("grad/connector_params", Dims{h5::extent(pc)});
     }
     t.grad_x0 = f.read<double>("grad/x0", Dims{dx[1], 2});
     const size_t S = length_of(f, "grad/rest_length");
-    t.grad_rest_length = f.read<double>("grad/rest_length", Dims{h(S)});
+    t.grad_rest_length = f.read<double>("grad/rest_length", Dims{h5::extent(S)});
   }
   return t;
 }

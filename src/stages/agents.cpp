@@ -84,23 +84,8 @@ void serialize(Ar& ar, Trained& t, unsigned) {
 class AgentsPlan final : public Plan {
  public:
   AgentsPlan(const AgentsDef& def, const AgentsSpec& spec, std::vector<evo::Individual> population)
-      : def_(def), A_(def_.agents), spec_(spec), P_(A_.population), population_(std::move(population)) {
-    gd_.epochs = A_.epochs;
-    gd_.steps = A_.episode_steps;
-    gd_.rule = evo::gd_rule_from(A_.gd_rule);
-    gd_.step = A_.gd_step;
-    gd_.adam_lr = A_.adam_lr;
-    gd_.rest_moves = A_.rest_moves;
-    gd_.rest_move_max = A_.rest_move_max;
-    gd_.rest_length_min = A_.rest_length_min;
-    gd_.rest_length_max = A_.rest_length_max;
-    mut_.body_flip_p = A_.body_flip_p;
-    mut_.spring_flip_p = A_.spring_flip_p;
-    mut_.rest_jitter_sd = A_.rest_jitter_sd;
-    mut_.body_fixed = A_.body_fixed;
-    mut_.springs_fixed = A_.springs_fixed;
-    mut_.rest_moves = A_.rest_moves;
-  }
+      : def_(def), A_(def_.agents), spec_(spec), P_(A_.population), gd_(evo::gd_options(A_)),
+        mut_(evo::mutation_options(A_)), population_(std::move(population)) {}
   Info info() const override { return {spec_.label, spec_.group, "generations_done", "generation", "agents", 0}; }
   int rounds() const override { return A_.generations + 1; }
   std::vector<Attribute> attributes() const override { return {{"population", int64_t{P_}}}; }

@@ -75,19 +75,19 @@ class LockstepPlan : public ConnectorsPlan {
   LockstepPlan(const ConnectorsDef& def, const std::vector<morph::Agent>& agents,
                const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
       : def_(def), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
-        N_(static_cast<int>(slots.size())), B_(spec.batch_pairs), I_(spec.iterations),
-        pop_(static_cast<int>(agents.size())), Pc_(sim::connector_param_count()), sg_(spec.state_group + "/state/") {}
+        slot_count_(static_cast<int>(slots.size())), batch_pairs_(spec.batch_pairs), iterations_(spec.iterations),
+        population_(static_cast<int>(agents.size())), params_per_connector_(sim::connector_param_count()), state_prefix_(spec.state_group + "/state/") {}
 
   Info info() const override { return {spec_.label, spec_.state_group, "iterations_done", "iteration", "pair-episodes"}; }
-  int rounds() const override { return I_; }
+  int rounds() const override { return iterations_; }
   void take_input(int, const std::string& input) override { weights_ = unpack<std::vector<double>>(input); }
 
  protected:
   // slot c's batch of iteration it: uniform slots pair agent i with its clone, diverse ones draw fresh pairs
   std::vector<std::pair<int, int>> batch(int c, int it) const {
-    if (!slots_[c].diverse) return collective::uniform_pairs(B_);
+    if (!slots_[c].diverse) return collective::uniform_pairs(batch_pairs_);
     Rng rng = make_rng(def_.seed, slots_[c].stream, it);
-    return collective::random_pairs(rng, pop_, B_);
+    return collective::random_pairs(rng, population_, batch_pairs_);
   }
   std::vector<double> initial_weights(int c) const {
     Rng rng = make_rng(def_.seed, slots_[c].stream, io::kItemInitialWeights);
@@ -96,8 +96,8 @@ class LockstepPlan : public ConnectorsPlan {
   // one pair episode of weight vector t.weights of the round's weights_
   PairDone episode(const PairTask& t, const sim::RunOptions& ro) {
     const ConnectorSlot& s = slots_[t.slot];
-    const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * Pc_,
-                                weights_.begin() + static_cast<size_t>(t.weights + 1) * Pc_);
+    const std::vector<double> w(weights_.begin() + static_cast<size_t>(t.weights) * params_per_connector_,
+                                weights_.begin() + static_cast<size_t>(t.weights + 1) * params_per_connector_);
     const collective::PairOutcome o = collective::run_pair(sim_, agents_[t.a], agents_[t.b], w, s.tether, s.env, def_.physics.contact, ro, nullptr);
     return PairDone{o.travel_u, o.travel_bl, static_cast<uint8_t>(o.status), o.grad, static_cast<uint8_t>(o.redone_in_double)};
   }
@@ -106,7 +106,7 @@ class LockstepPlan : public ConnectorsPlan {
     Records out;
     for (size_t gi = 0; gi < groups_.groups.size(); ++gi) {
       std::vector<double> u(groups_.columns[gi], kNaN);
-      for (int c = 0; c < N_; ++c)
+      for (int c = 0; c < slot_count_; ++c)
         if (slots_[c].group == groups_.groups[gi]) u[slots_[c].column] = per_slot[c];
       out.push_back({groups_.groups[gi] + "/" + name, {static_cast<uint64_t>(rows), static_cast<uint64_t>(groups_.columns[gi])},
                      {row}, std::move(u)});
@@ -120,7 +120,7 @@ class LockstepPlan : public ConnectorsPlan {
       Record r{groups_.groups[gi] + "/" + name, {static_cast<uint64_t>(groups_.columns[gi])}, {}, std::vector<double>{}};
       if (width > 0) r.dims.push_back(width);
       auto& v = std::get<std::vector<double>>(r.values);
-      for (int c = 0; c < N_; ++c)
+      for (int c = 0; c < slot_count_; ++c)
         if (slots_[c].group == groups_.groups[gi])
           r.rows.push_back(slots_[c].column), v.insert(v.end(), per_slot[c].begin(), per_slot[c].end());
       out.push_back(std::move(r));
@@ -129,8 +129,8 @@ class LockstepPlan : public ConnectorsPlan {
   }
   // state/<name> (N × width): one row per slot
   Record state_rows(const std::string& name, const std::vector<std::vector<double>>& per_slot, size_t width) const {
-    Record r{sg_ + name, {static_cast<uint64_t>(N_), width}, {}, io::join_weights(per_slot)};
-    for (int c = 0; c < N_; ++c) r.rows.push_back(c);
+    Record r{state_prefix_ + name, {static_cast<uint64_t>(slot_count_), width}, {}, io::join_weights(per_slot)};
+    for (int c = 0; c < slot_count_; ++c) r.rows.push_back(c);
     return r;
   }
   // numerical trouble, reported with where: pairs whose episode ran (status ok) but whose gradient was not
@@ -148,10 +148,11 @@ class LockstepPlan : public ConnectorsPlan {
                           "again with the networks in double");
   }
   std::vector<std::string> take_warnings() override { return std::exchange(warnings_, {}); }
-  Records curves(int it, const std::vector<double>& cu, const std::vector<double>& cb, const std::vector<double>& nn) const {
-    Records out = slot_row("curve_u", I_, it, cu);
-    out += slot_row("curve_bl", I_, it, cb);
-    out += slot_row("nan_pairs", I_, it, nn);
+  Records curves(int it, const std::vector<double>& travel_u, const std::vector<double>& travel_bl,
+                 const std::vector<double>& nan_pairs) const {
+    Records out = slot_row("curve_u", iterations_, it, travel_u);
+    out += slot_row("curve_bl", iterations_, it, travel_bl);
+    out += slot_row("nan_pairs", iterations_, it, nan_pairs);
     return out;
   }
 
@@ -160,10 +161,10 @@ class LockstepPlan : public ConnectorsPlan {
   const std::vector<ConnectorSlot>& slots_;
   const TrainSpec spec_;
   const SlotGroups groups_;
-  const int N_, B_, I_, pop_, Pc_;
-  const std::string sg_;
+  const int slot_count_, batch_pairs_, iterations_, population_, params_per_connector_;
+  const std::string state_prefix_;
   sim::Simulator sim_;
-  std::vector<double> weights_;  // the round's weight vectors, Pc each (every rank)
+  std::vector<double> weights_;  // the round's weight vectors, params_per_connector_ each (every rank)
   std::vector<std::string> warnings_;  // of the last end_round
 };
 
@@ -171,36 +172,36 @@ class LockstepPlan : public ConnectorsPlan {
 class PlainConnectorsPlan final : public LockstepPlan {
  public:
   using LockstepPlan::LockstepPlan;
-  std::vector<std::string> state_paths() const override { return {sg_ + "params", sg_ + "adam_m", sg_ + "adam_v"}; }
+  std::vector<std::string> state_paths() const override { return {state_prefix_ + "params", state_prefix_ + "adam_m", state_prefix_ + "adam_v"}; }
   void start(int done, const StoredState& s) override {
-    params_.resize(N_);
-    adam_.resize(N_);
+    params_.resize(slot_count_);
+    adam_.resize(slot_count_);
     if (done > 0) {
-      params_ = io::split_weights(s.at(sg_ + "params"), N_);
-      const auto m = io::split_weights(s.at(sg_ + "adam_m"), N_), v = io::split_weights(s.at(sg_ + "adam_v"), N_);
-      for (int c = 0; c < N_; ++c) adam_[c].m = m[c], adam_[c].v = v[c];
+      params_ = io::split_weights(s.at(state_prefix_ + "params"), slot_count_);
+      const auto m = io::split_weights(s.at(state_prefix_ + "adam_m"), slot_count_), v = io::split_weights(s.at(state_prefix_ + "adam_v"), slot_count_);
+      for (int c = 0; c < slot_count_; ++c) adam_[c].m = m[c], adam_[c].v = v[c];
       return;
     }
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       params_[c] = initial_weights(c);
-      adam_[c].m.assign(Pc_, 0.0);
-      adam_[c].v.assign(Pc_, 0.0);
+      adam_[c].m.assign(params_per_connector_, 0.0);
+      adam_[c].v.assign(params_per_connector_, 0.0);
     }
   }
   Records state() const override {
     std::vector<std::vector<double>> m, v;
     for (const evo::Adam& a : adam_) m.push_back(a.m), v.push_back(a.v);
-    return {state_rows("params", params_, Pc_), state_rows("adam_m", m, Pc_), state_rows("adam_v", v, Pc_)};
+    return {state_rows("params", params_, params_per_connector_), state_rows("adam_m", m, params_per_connector_), state_rows("adam_v", v, params_per_connector_)};
   }
   std::string round_input(int) override { return pack(io::join_weights(params_)); }
   std::vector<std::string> items(int it) override {
     std::vector<std::string> items;
-    for (int c = 0; c < N_; ++c)
+    for (int c = 0; c < slot_count_; ++c)
       for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
-    cu_.assign(N_, kNaN), cb_.assign(N_, kNaN), nn_.assign(N_, 0);
+    curve_u_.assign(slot_count_, kNaN), curve_bl_.assign(slot_count_, kNaN), nan_pairs_.assign(slot_count_, 0);
     collective::ProbeSum empty;
     empty.pair_clip = collective::pair_clip(collective::opt_settings(def_.connectors));  // connectors.clip
-    sums_.assign(N_, empty);
+    sums_.assign(slot_count_, empty);
     return items;
   }
   std::string compute(const std::string& item) override {
@@ -212,24 +213,24 @@ class PlainConnectorsPlan final : public LockstepPlan {
   }
   void reduce(int, int64_t i, const std::string& bytes) override {
     // in pair order; a pair not ok or with a non-finite gradient is counted
-    sums_[static_cast<size_t>(i / B_)].add(outcome(unpack<PairDone>(bytes)));
+    sums_[static_cast<size_t>(i / batch_pairs_)].add(outcome(unpack<PairDone>(bytes)));
   }
   Records end_round(int it) override {
     const auto& C = def_.connectors;
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       collective::ProbeResult r = sums_[c].mean();
-      nn_[c] = r.not_ok;
+      nan_pairs_[c] = r.not_ok;
       report_bad_gradients(it, c, r.bad_grad, r.redone);
       if (r.ok == 0) continue;
-      cu_[c] = r.travel_u;
-      cb_[c] = r.travel_bl;
+      curve_u_[c] = r.travel_u;
+      curve_bl_[c] = r.travel_bl;
       for (double& x : r.grad) x = -x;  // loss = −mean travel
       if (C.optimizer == "adam")
         adam_[c].step(params_[c], r.grad, C.lr, C.clip_norm, it + 1);
       else
         evo::normalized_step(params_[c], r.grad, C.lr);
     }
-    return curves(it, cu_, cb_, nn_);
+    return curves(it, curve_u_, curve_bl_, nan_pairs_);
   }
   std::string summary(int) const override {
     std::string s;
@@ -237,8 +238,8 @@ class PlainConnectorsPlan final : public LockstepPlan {
     for (size_t gi = 0; gi < groups.size() && gi < 6; ++gi) {
       double m = 0;
       int k = 0;
-      for (int c = 0; c < N_; ++c)
-        if (slots_[c].group == groups[gi] && std::isfinite(cb_[c])) m += cb_[c], ++k;
+      for (int c = 0; c < slot_count_; ++c)
+        if (slots_[c].group == groups[gi] && std::isfinite(curve_bl_[c])) m += curve_bl_[c], ++k;
       char b[128];
       std::snprintf(b, sizeof b, "%s%s %.3f", s.empty() ? "" : " ", groups[gi].substr(groups[gi].rfind('/') + 1).c_str(),
                     k ? m / k : NAN);
@@ -246,13 +247,13 @@ class PlainConnectorsPlan final : public LockstepPlan {
     }
     return s + (groups.size() > 6 ? " ... BL" : " BL");
   }
-  Records finish() override { return slot_rows("params", params_, Pc_); }
+  Records finish() override { return slot_rows("params", params_, params_per_connector_); }
   std::vector<std::vector<double>> weights() const override { return params_; }
 
  private:
   std::vector<std::vector<double>> params_;
   std::vector<evo::Adam> adam_;
-  std::vector<double> cu_, cb_, nn_;
+  std::vector<double> curve_u_, curve_bl_, nan_pairs_;
   std::vector<collective::ProbeSum> sums_;  // each slot's batch, summed in pair order
 };
 
@@ -269,25 +270,25 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   bool closing_round() const override { return os_.keep_best; }
   std::vector<std::string> state_paths() const override {
     std::vector<std::string> p;
-    for (const char* n : {"params", "adam_m", "adam_v", "best_params", "best"}) p.push_back(sg_ + n);
-    if (es_) p.push_back(sg_ + "es_fitness");
+    for (const char* n : {"params", "adam_m", "adam_v", "best_params", "best"}) p.push_back(state_prefix_ + n);
+    if (es_) p.push_back(state_prefix_ + "es_fitness");
     return p;
   }
   void start(int done, const StoredState& s) override {
-    for (int c = 0; c < N_; ++c) opt_.emplace_back(os_, initial_weights(c), I_, def_.seed, slots_[c].stream);
+    for (int c = 0; c < slot_count_; ++c) opt_.emplace_back(os_, initial_weights(c), iterations_, def_.seed, slots_[c].stream);
     if (os_.keep_best)
-      for (int c = 0; c < N_; ++c)
-        val_.push_back(collective::validation_pairs(slots_[c].diverse, def_.connectors.validation_pairs, B_, pop_,
+      for (int c = 0; c < slot_count_; ++c)
+        val_.push_back(collective::validation_pairs(slots_[c].diverse, def_.connectors.validation_pairs, batch_pairs_, population_,
                                                     def_.seed, slots_[c].stream));
     if (done == 0) return;
     auto row = [&](const std::string& name, int c, size_t w) {
-      const std::vector<double>& x = s.at(sg_ + name);
+      const std::vector<double>& x = s.at(state_prefix_ + name);
       return std::vector<double>(x.begin() + c * w, x.begin() + (c + 1) * w);
     };
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       collective::ConnectorOptimizer::State st;
-      st.params = row("params", c, Pc_), st.m = row("adam_m", c, Pc_), st.v = row("adam_v", c, Pc_);
-      st.best_params = row("best_params", c, Pc_);
+      st.params = row("params", c, params_per_connector_), st.m = row("adam_m", c, params_per_connector_), st.v = row("adam_v", c, params_per_connector_);
+      st.best_params = row("best_params", c, params_per_connector_);
       const std::vector<double> b = row("best", c, 2);
       st.best_score = b[0], st.best_it = static_cast<int>(b[1]);
       if (es_) st.es_fitness = row("es_fitness", c, E_);
@@ -296,27 +297,27 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   }
   Records state() const override {
     std::vector<std::vector<double>> p, m, v, bp, b, ef;
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       const auto st = opt_[c].state();
       p.push_back(st.params), m.push_back(st.m), v.push_back(st.v), bp.push_back(st.best_params);
       b.push_back({st.best_score, static_cast<double>(st.best_it)});
       ef.push_back(st.es_fitness);
       ef.back().resize(E_, kNaN);
     }
-    Records r = {state_rows("params", p, Pc_), state_rows("adam_m", m, Pc_), state_rows("adam_v", v, Pc_),
-                 state_rows("best_params", bp, Pc_), state_rows("best", b, 2)};
+    Records r = {state_rows("params", p, params_per_connector_), state_rows("adam_m", m, params_per_connector_), state_rows("adam_v", v, params_per_connector_),
+                 state_rows("best_params", bp, params_per_connector_), state_rows("best", b, 2)};
     if (es_) r.push_back(state_rows("es_fitness", ef, E_));
     return r;
   }
   // the round's weight vectors and items: each slot's probes on its batch, then (keep_best) its current
   // weights on its validation batch; the closing round (it = I) has the validation alone
   std::string round_input(int it) override {
-    const bool closing = it >= I_;
+    const bool closing = it >= iterations_;
     std::vector<double> w;
     items_.clear();
-    counts_.assign(N_, {});
+    counts_.assign(slot_count_, {});
     int nw = 0;
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       if (!closing) {
         const auto pairs = batch(c, it);
         for (const collective::Probe& p : opt_[c].ask(it)) {
@@ -349,10 +350,10 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<PairDone>(bytes); }
   Records end_round(int it) override {
     // per slot: the probes' mean results and the validation score
-    std::vector<std::vector<collective::ProbeResult>> results(N_);
-    vscore_.assign(N_, kNaN);
+    std::vector<std::vector<collective::ProbeResult>> results(slot_count_);
+    vscore_.assign(slot_count_, kNaN);
     size_t q = 0;
-    for (int c = 0; c < N_; ++c) {
+    for (int c = 0; c < slot_count_; ++c) {
       int bad_grad = 0, redone = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
         collective::ProbeSum sum;
@@ -365,21 +366,21 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
       report_bad_gradients(it, c, bad_grad, redone);
     }
     Records out;
-    if (it < I_) {
-      cu_.assign(N_, kNaN), cb_.assign(N_, kNaN);
-      std::vector<double> nn(N_, 0);
-      for (int c = 0; c < N_; ++c) {
+    if (it < iterations_) {
+      curve_u_.assign(slot_count_, kNaN), curve_bl_.assign(slot_count_, kNaN);
+      std::vector<double> nan_pairs(slot_count_, 0);
+      for (int c = 0; c < slot_count_; ++c) {
         opt_[c].tell(it, results[c], vscore_[c]);
-        cu_[c] = opt_[c].curve_u, cb_[c] = opt_[c].curve_bl, nn[c] = opt_[c].curve_not_ok;
+        curve_u_[c] = opt_[c].curve_u, curve_bl_[c] = opt_[c].curve_bl, nan_pairs[c] = opt_[c].curve_not_ok;
       }
-      out = curves(it, cu_, cb_, nn);
+      out = curves(it, curve_u_, curve_bl_, nan_pairs);
     } else {  // the final weights' validation, and the kept weights' rows
-      for (int c = 0; c < N_; ++c) opt_[c].finish(vscore_[c]);
+      for (int c = 0; c < slot_count_; ++c) opt_[c].finish(vscore_[c]);
     }
-    if (os_.keep_best) out += slot_row("val_bl", I_ + 1, it, vscore_);
-    if (it >= I_) {
+    if (os_.keep_best) out += slot_row("val_bl", iterations_ + 1, it, vscore_);
+    if (it >= iterations_) {
       std::vector<std::vector<double>> bi;
-      for (int c = 0; c < N_; ++c) bi.push_back({static_cast<double>(opt_[c].best_iteration())});
+      for (int c = 0; c < slot_count_; ++c) bi.push_back({static_cast<double>(opt_[c].best_iteration())});
       out += slot_rows("best_iteration", bi, 0);
     }
     return out;
@@ -387,18 +388,18 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   std::string summary(int) const override {
     double m = 0, v = 0;
     int k = 0, kv = 0;
-    for (int c = 0; c < N_; ++c) {
-      if (std::isfinite(cb_[c])) m += cb_[c], ++k;
+    for (int c = 0; c < slot_count_; ++c) {
+      if (std::isfinite(curve_bl_[c])) m += curve_bl_[c], ++k;
       if (std::isfinite(vscore_[c])) v += vscore_[c], ++kv;
     }
     char b[160];
     std::snprintf(b, sizeof b, "batch %.3f BL", k ? m / k : NAN);
     std::string s = b;
     if (kv) std::snprintf(b, sizeof b, ", validation %.3f BL", v / kv), s += b;
-    std::snprintf(b, sizeof b, " (mean over %d connectors)", N_);
+    std::snprintf(b, sizeof b, " (mean over %d connectors)", slot_count_);
     return s + b;
   }
-  Records finish() override { return slot_rows("params", weights(), Pc_); }
+  Records finish() override { return slot_rows("params", weights(), params_per_connector_); }
   std::vector<std::vector<double>> weights() const override {
     std::vector<std::vector<double>> w;
     for (const auto& o : opt_) w.push_back(o.result());
@@ -414,7 +415,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   std::vector<std::string> items_;
   std::vector<std::vector<int>> counts_;
   std::vector<PairDone> done_;
-  std::vector<double> cu_, cb_, vscore_;
+  std::vector<double> curve_u_, curve_bl_, vscore_;
 };
 
 }  // namespace

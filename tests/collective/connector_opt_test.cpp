@@ -88,7 +88,7 @@ TEST(ConnectorOpt, PerPairClippingKeepsAnExplodingPairFromSettingTheDirection) {
   for (int k = 0; k < 4; ++k) batch[k].travel_u = 0.1, batch[k].travel_bl = 0.5, batch[k].grad = {0.5, 0.0};
   batch[4].travel_u = 0.1, batch[4].travel_bl = 0.5, batch[4].grad = {0.0, 1000.0};
   auto step = [&](const std::string& clip) {
-    OptSettings s;
+    OptSettings s = collective::opt_settings(io::default_config().connectors);
     s.clip = clip;
     s.clip_norm = 1.0;
     collective::ProbeSum sum;
@@ -117,11 +117,11 @@ TEST(ConnectorOpt, PerPairClippingKeepsAnExplodingPairFromSettingTheDirection) {
   b.pair_clip = 1.0;
   for (int k = 0; k < 4; ++k) a.add(batch[k]), b.add(batch[k]);
   EXPECT_EQ(a.mean().grad, b.mean().grad);
-  EXPECT_EQ(collective::pair_clip(OptSettings{}), 0.0);  // the default: no per-pair clipping
+  EXPECT_EQ(collective::pair_clip(collective::opt_settings(io::default_config().connectors)), 0.0);  // the default: no per-pair clipping
 }
 
 TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
-  OptSettings s;
+  OptSettings s = collective::opt_settings(io::default_config().connectors);
   s.lr = 0.01;
   s.lr_final = 0.1;
   EXPECT_EQ(collective::scheduled_lr(s, 0, 50), 0.01);
@@ -149,7 +149,7 @@ TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
 }
 
 TEST(ConnectorOpt, KeepBestReturnsTheValidationBestWeights) {
-  OptSettings s;
+  OptSettings s = collective::opt_settings(io::default_config().connectors);
   s.keep_best = true;
   s.lr = 0.05;
   const int I = 12;
@@ -175,7 +175,7 @@ TEST(ConnectorOpt, KeepBestReturnsTheValidationBestWeights) {
 }
 
 TEST(ConnectorOpt, GradientAveragingIsAntitheticAndExactOnAQuadratic) {
-  OptSettings s;
+  OptSettings s = collective::opt_settings(io::default_config().connectors);
   s.grad_samples = 4;
   s.grad_sigma = 0.05;
   std::vector<double> init = {0.5, -0.2, 0.1, 0.9, 0.0, 0.3};
@@ -202,7 +202,7 @@ TEST(ConnectorOpt, GradientAveragingIsAntitheticAndExactOnAQuadratic) {
 }
 
 TEST(ConnectorOpt, CmaesImprovesAKnownObjectiveAndResumesFromItsFitness) {
-  OptSettings s;
+  OptSettings s = collective::opt_settings(io::default_config().connectors);
   s.optimizer = "cmaes";
   s.es_popsize = 12;
   s.es_sigma = 0.1;
@@ -237,7 +237,7 @@ TEST(ConnectorOpt, CmaesImprovesAKnownObjectiveAndResumesFromItsFitness) {
 }
 
 TEST(ConnectorOpt, AntitheticEsImprovesAKnownObjectiveAndResumesFromItsState) {
-  OptSettings s;
+  OptSettings s = collective::opt_settings(io::default_config().connectors);
   s.optimizer = "es";
   s.es_popsize = 10;
   s.es_sigma = 0.05;

@@ -90,7 +90,7 @@ TEST(AgentsPlan, GenerationZeroIsEachRandomAgentTrainedByGradientDescent) {
   const io::RunConfig cfg = config();
   const auto plan = make_agents_plan(agents_def(cfg), AgentsSpec{}, {});
   const test::Datasets d = test::written(run_serial(*plan));
-  evo::GdOptions gd;
+  evo::GdOptions gd = evo::gd_options(io::default_config().agents);
   gd.epochs = cfg.agents.epochs;
   gd.steps = cfg.agents.episode_steps;
   gd.rule = evo::gd_rule_from(cfg.agents.gd_rule);
