@@ -77,7 +77,7 @@ double thread_cpu_s() {
 // woken at once by its own computing thread; it holds queued blocks, so a slow answer costs no work).
 // A serving thread whose own computing thread has work, with no message of its own in flight, skips the ramp
 // and naps at once (the master: half its mean item time, 2 to 10 ms; a worker: 10 ms), woken when its item
-// finishes (see `calm` in serve_master and serve_worker): each wake-up takes the core from that computing
+// finishes (see `calm` in Master::nap and Worker::nap): each wake-up takes the core from that computing
 // thread, and the ramp from 20 µs after every message had cost it 2-3% of its time
 class Backoff {
  public:
@@ -293,6 +293,8 @@ void precise_naps(int size) {
 #endif
 }
 
+using Compute = std::function<std::string(const std::string&)>;
+
 // the thread that computes items on one rank, and what it shares with the serving thread
 struct Shared {
   std::mutex mu;
@@ -303,6 +305,12 @@ struct Shared {
   long items = 0;
   double own_s = 0;     // the master: wall seconds of the items its computing thread finished in this farm()
   long own_items = 0;   // and how many
+  // adds the computing thread's totals to this rank's clock
+  void add_to(FarmClock& clock) const {
+    clock.compute_s += compute_s;
+    clock.compute_cpu_s += compute_cpu_s;
+    clock.items += items;
+  }
 };
 
 // records one compute() call's time: wall seconds, and CPU seconds of the calling thread (less than the wall
@@ -319,344 +327,431 @@ std::string timed_compute(const std::function<std::string(const std::string&)>& 
   return r;
 }
 
-void serve_master(MPI_Comm comm, int size, int64_t n, const std::vector<std::string>& items,
-                  const std::function<std::string(const std::string&)>& compute, const FarmOptions& opt,
-                  FarmResult& out, FarmClock& clock) {
-  const bool master_computes = opt.master_works && node_has_core_per_rank(size);
-  const int computing = size - 1 + (master_computes ? 1 : 0);
-  Shared sh;
-  // with costs, items go out dearest first (equal costs in index order): position p is item order[p], and
-  // cum[p] the cost of the items before it
-  std::vector<int64_t> order;
-  std::vector<double> cum;
-  if (!opt.costs.empty()) {
-    order.resize(n);
-    std::iota(order.begin(), order.end(), int64_t{0});
-    std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return opt.costs[a] > opt.costs[b]; });
-    cum.assign(n + 1, 0.0);
-    for (int64_t p = 0; p < n; ++p) cum[p + 1] = cum[p] + opt.costs[order[p]];
-  }
-  const auto at = [&](int64_t pos) { return order.empty() ? pos : order[pos]; };
-  int64_t next = 0;                  // first position not yet handed out (guarded by sh.mu)
-  std::vector<char> have(n, 0);      // item has its result on the master (guarded by sh.mu)
-  int64_t local_new = 0;             // items the master's thread finished since the server last looked
-  bool local_running = false;
+// the master's side of a farm(): hands the items out to the workers in blocks, takes their results in and, when
+// its node has a core per rank, computes items of its own in a thread beside its messages, from the same queue
+class Master {
+ public:
+  Master(MPI_Comm comm, int size, int64_t n, const std::vector<std::string>& items, const Compute& compute,
+         const FarmOptions& opt, FarmResult& out, FarmClock& clock);
+  // if serving fails (an exception from MPI, progress or on_result), the computing thread stops after its item
+  ~Master();
+  Master(const Master&) = delete;
+  Master& operator=(const Master&) = delete;
+  // the whole round: every item handed out or computed here, every result in, every worker told the round is over
+  void serve();
 
-  // hands worker w its next block, or tells it the round is over (once)
-  Sender sender(comm);
-  std::vector<char> ended(size, 0);
-  std::vector<int> held(size, 0);  // blocks handed to each worker whose results have not come back
-  int open_workers = size - 1;
+ private:
+  int64_t at(int64_t pos) const { return order_.empty() ? pos : order_[pos]; }
   // the round's tail: items are left, no more than 4 per computing rank (automatic blocks are then one item)
-  auto in_tail = [&](int64_t left) { return left > 0 && left <= 4 * computing; };
-  auto give = [&](int w) {
-    const auto t0 = Clock::now();
-    int64_t first = 0, count = 0;
-    {
-      std::lock_guard lk(sh.mu);
-      const int64_t left = n - next;
-      // the round's tail (blocks of one item): a worker gets its next item only once it has none left, so
-      // that no item waits in one worker's queue while another rank, the master too, has nothing to do
-      if (in_tail(left) && held[w] > 0 && opt.block <= 0) return;
-      if (left > 0) {
-        int64_t guided = (left + 4 * computing - 1) / (4 * computing);
-        if (!cum.empty()) {  // by cost: the dearest items left, as few as make 1/(4 × computing) of the cost left
-          const double target = (cum[n] - cum[next]) / (4.0 * computing);
-          guided = std::lower_bound(cum.begin() + next + 1, cum.end(), cum[next] + target) - (cum.begin() + next);
-        }
-        count = std::min(left, opt.block > 0 ? int64_t{opt.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt.max_block)));
-        first = next;
-        next += count;
-      }
-    }
-    if (count > 0) {
-      ++held[w];
-      std::vector<int64_t> index(count);
-      for (int64_t k = 0; k < count; ++k) out.owner[index[k] = at(first + k)] = w;
-      std::string buf = pack_block(index.data(), count, [&](int64_t k) -> const std::string& { return items[index[k]]; });
-      clock.task_bytes += static_cast<double>(buf.size());
-      ++clock.task_msgs;
-      trace().add('G', static_cast<double>(index[0]));
-      sender.send(w, kTask, std::move(buf));
-    } else if (!ended[w]) {
-      ended[w] = 1;
-      --open_workers;
-      sender.send(w, kRoundEnd, std::string());
-    }
-    clock.task_s += seconds_since(t0);
-  };
-  for (int k = 0; k < std::max(1, opt.depth); ++k)
-    for (int w = 1; w < size; ++w) give(w);
+  bool in_tail(int64_t left) const { return left > 0 && left <= 4 * computing_; }
+  void give(int w);
+  void compute_own();
+  bool take_results();
+  bool take_own(bool& running);
+  void finished(int64_t k);
+  void nap(bool active, bool running);
 
-  // the master's own items, one at a time, from the same queue
-  std::thread local;
-  if (master_computes && n > 0) {
-    local_running = true;
-    local = std::thread([&] {
-      double secs = 0, cpu = 0;
-      long count = 0;
-      std::unique_lock lk(sh.mu);
-      while (next < n && !sh.error) {
-        const int64_t i = at(next++);
-        out.owner[i] = 0;
-        lk.unlock();
-        std::string r;
-        const double before = secs;
-        try {
-          r = timed_compute(compute, items[i], secs, cpu);
-        } catch (...) {
-          lk.lock();
-          sh.error = std::current_exception();
-          break;
-        }
-        lk.lock();
-        sh.own_s += secs - before, ++sh.own_items;
-        out.results[i] = std::move(r);
-        have[i] = 1;
-        ++local_new, ++count;
-        sh.to_server.notify_one();
-      }
-      sh.compute_s += secs;
-      sh.compute_cpu_s += cpu;
-      sh.items += count;
-      local_running = false;
-      sh.to_server.notify_one();
-    });
-  }
+  MPI_Comm comm_;
+  int size_;
+  int64_t n_;
+  const std::vector<std::string>& items_;
+  const Compute& compute_;
+  const FarmOptions& opt_;
+  FarmResult& out_;
+  FarmClock& clock_;
+  const bool master_computes_;
+  const int computing_;
+  Shared sh_;
+  // with costs, items go out dearest first (equal costs in index order): position p is item order_[p], and
+  // cum_[p] the cost of the items before it
+  std::vector<int64_t> order_;
+  std::vector<double> cum_;
+  int64_t next_ = 0;          // first position not yet handed out (guarded by sh_.mu)
+  std::vector<char> have_;    // item has its result on the master (guarded by sh_.mu)
+  int64_t local_new_ = 0;     // items the master's thread finished since the server last looked (guarded by sh_.mu)
+  bool local_running_ = false;
+  Sender sender_;
+  std::vector<char> ended_;
+  std::vector<int> held_;  // blocks handed to each worker whose results have not come back
+  int open_workers_;
+  std::thread local_;
+  int64_t done_ = 0, folded_ = 0;
+  Receiver receiver_;
+  Backoff backoff_;
+};
 
-  // if serving fails (an exception from MPI, progress or on_result), the thread stops after its item
-  struct Joiner {
-    std::thread& t;
-    Shared& sh;
-    int64_t& next;
-    int64_t n;
-    ~Joiner() {
-      if (!t.joinable()) return;
-      {
-        std::lock_guard lk(sh.mu);
-        next = n;
-      }
-      t.join();
-    }
-  } joiner{local, sh, next, n};
-  int64_t done = 0, folded = 0;
-  auto finished = [&](int64_t k) {
-    for (int64_t q = 0; q < k; ++q) {
-      ++done;
-      if (opt.progress) opt.progress(static_cast<int>(done), static_cast<int>(n));
-    }
-  };
-  Receiver receiver;
-  Backoff backoff;
-  for (;;) {
-    bool active = false;
-    // Open MPI's probe (ob1) looks among the messages already matched in and only then advances its
-    // transports, so a result that arrived during a nap would be seen one look later (measured: the master
-    // took a tail result in 1.0-1.8 ms after it was sent, looking every 1.1 ms; 0.6 ms with this): advance
-    // first with a probe whose answer is not used, then take everything in
-    {
-      int ignored = 0;
-      MPI_Iprobe(MPI_ANY_SOURCE, kResult, comm, &ignored, MPI_STATUS_IGNORE);
-    }
-    // every result that has arrived is answered at once with the worker's next block
-    for (;;) {
-      int flag = 0;
-      MPI_Message msg;
-      MPI_Status st;
-      MPI_Improbe(MPI_ANY_SOURCE, kResult, comm, &flag, &msg, &st);
-      if (!flag) break;
-      active = true;
-      const auto t0 = Clock::now();
-      trace().add('R', 0);
-      receiver.receive(msg, st);
-      clock.result_s += seconds_since(t0);
-      --held[st.MPI_SOURCE];
-      give(st.MPI_SOURCE);
-    }
-    for (const auto& m : receiver.take()) {
-      active = true;
-      const auto t0 = Clock::now();
-      Block b = unpack_block(m->bytes.get());
-      const auto count = static_cast<int64_t>(b.data.size());
-      for (int64_t k = 0; k < count; ++k) out.results[b.index[k]] = std::move(b.data[k]);
-      {
-        std::lock_guard lk(sh.mu);
-        for (int64_t i : b.index) have[i] = 1;
-      }
-      clock.result_bytes += static_cast<double>(m->size);
-      ++clock.result_msgs;
-      clock.results += count;
-      clock.result_s += seconds_since(t0);
-      finished(count);
-    }
-    int64_t fresh = 0, fold_to = folded;
-    bool running = false;
-    std::exception_ptr error;
-    {
-      std::lock_guard lk(sh.mu);
-      fresh = local_new;
-      local_new = 0;
-      running = local_running;
-      error = sh.error;
-      if (opt.on_result)
-        while (fold_to < n && have[fold_to]) ++fold_to;
-    }
-    if (error) {
-      if (local.joinable()) local.join();
-      std::rethrow_exception(error);
-    }
-    if (fresh > 0) active = true, finished(fresh);
-    for (; folded < fold_to; ++folded) opt.on_result(folded, out.results[folded]);
-    sender.reap();
-    if (done == n && open_workers == 0 && !running) break;
-    // calm: this core's computing thread is at work, nothing of ours is in flight and no worker waits for
-    // its next item (the tail), so nothing here is urgent: the computing thread's next item wakes us, and a
-    // worker's result can wait half an item (it holds its next block)
-    const bool calm = running && sender.empty() && receiver.empty() && !in_tail(n - next);
-    if (active && !calm) {
-      backoff.reset();
-    } else {
-      std::unique_lock lk(sh.mu);
-      // in the round's tail a worker waits for its next item: look more often
-      const double mean_item_s = sh.own_items > 0 ? sh.own_s / static_cast<double>(sh.own_items) : 0.0;
-      const auto nap = calm ? std::chrono::microseconds(Backoff::calm_master_us(mean_item_s))
-                            : backoff.next(in_tail(n - next) ? Backoff::tail_us(mean_item_s) : Backoff::kMaxUs);
-      sh.to_server.wait_for(lk, nap, [&] { return local_new > 0 || sh.error || (!local_running && running); });
-    }
+Master::Master(MPI_Comm comm, int size, int64_t n, const std::vector<std::string>& items, const Compute& compute,
+               const FarmOptions& opt, FarmResult& out, FarmClock& clock)
+    : comm_(comm), size_(size), n_(n), items_(items), compute_(compute), opt_(opt), out_(out), clock_(clock),
+      master_computes_(opt.master_works && node_has_core_per_rank(size)),
+      computing_(size - 1 + (master_computes_ ? 1 : 0)), have_(n, 0), sender_(comm), ended_(size, 0),
+      held_(size, 0), open_workers_(size - 1) {
+  if (!opt.costs.empty()) {
+    order_.resize(n);
+    std::iota(order_.begin(), order_.end(), int64_t{0});
+    std::stable_sort(order_.begin(), order_.end(), [&](int64_t a, int64_t b) { return opt.costs[a] > opt.costs[b]; });
+    cum_.assign(n + 1, 0.0);
+    for (int64_t p = 0; p < n; ++p) cum_[p + 1] = cum_[p] + opt.costs[order_[p]];
   }
-  if (local.joinable()) local.join();
-  sender.wait_all();
-  clock.compute_s += sh.compute_s;
-  clock.compute_cpu_s += sh.compute_cpu_s;
-  clock.items += sh.items;
 }
 
-void serve_worker(MPI_Comm comm, const std::function<std::string(const std::string&)>& compute, FarmResult& out,
-                  FarmClock& clock, bool own_core) {
-  Shared sh;  // a Block's data: its tasks, then their results
-  std::deque<Block> queued, computed;
-  bool busy = false, stop = false;
-  std::thread worker([&] {
-    double secs = 0, cpu = 0;
-    long count = 0;
-    std::unique_lock lk(sh.mu);
-    for (;;) {
-      sh.to_worker.wait(lk, [&] { return stop || !queued.empty(); });
-      if (queued.empty() || sh.error) break;
-      Block b = std::move(queued.front());
-      queued.pop_front();
-      busy = true;
-      lk.unlock();
-      try {
-        for (std::string& x : b.data) x = timed_compute(compute, x, secs, cpu), ++count;
-      } catch (...) {
-        lk.lock();
-        sh.error = std::current_exception();
-        busy = false;
-        sh.to_server.notify_one();
-        break;
-      }
-      lk.lock();
-      busy = false;
-      computed.push_back(std::move(b));
-      sh.to_server.notify_one();
-    }
-    sh.compute_s += secs;
-    sh.compute_cpu_s += cpu;
-    sh.items += count;
-  });
-  auto finish_thread = [&] {
-    {
-      std::lock_guard lk(sh.mu);
-      stop = true;
-      queued.clear();
-    }
-    sh.to_worker.notify_one();
-    if (worker.joinable()) worker.join();
-  };
-  struct Finally {
-    std::function<void()> f;
-    ~Finally() { f(); }
-  } finally{finish_thread};
+Master::~Master() {
+  if (!local_.joinable()) return;
+  {
+    std::lock_guard lk(sh_.mu);
+    next_ = n_;
+  }
+  local_.join();
+}
 
-  Sender sender(comm);
-  Receiver receiver;
-  bool got_end = false;
-  bool end_matched = false;  // this farm's kRoundEnd has been matched: what comes after it is the next farm's
-  Backoff backoff;
-  Clock::time_point idle_since{};
-  bool was_idle = false;
+// hands worker w its next block, or tells it the round is over (once)
+void Master::give(int w) {
+  const auto t0 = Clock::now();
+  int64_t first = 0, count = 0;
+  {
+    std::lock_guard lk(sh_.mu);
+    const int64_t left = n_ - next_;
+    // the round's tail (blocks of one item): a worker gets its next item only once it has none left, so
+    // that no item waits in one worker's queue while another rank, the master too, has nothing to do
+    if (in_tail(left) && held_[w] > 0 && opt_.block <= 0) return;
+    if (left > 0) {
+      int64_t guided = (left + 4 * computing_ - 1) / (4 * computing_);
+      if (!cum_.empty()) {  // by cost: the dearest items left, as few as make 1/(4 × computing) of the cost left
+        const double target = (cum_[n_] - cum_[next_]) / (4.0 * computing_);
+        guided = std::lower_bound(cum_.begin() + next_ + 1, cum_.end(), cum_[next_] + target) - (cum_.begin() + next_);
+      }
+      count = std::min(left, opt_.block > 0 ? int64_t{opt_.block} : std::clamp<int64_t>(guided, 1, std::max(1, opt_.max_block)));
+      first = next_;
+      next_ += count;
+    }
+  }
+  if (count > 0) {
+    ++held_[w];
+    std::vector<int64_t> index(count);
+    for (int64_t k = 0; k < count; ++k) out_.owner[index[k] = at(first + k)] = w;
+    std::string buf = pack_block(index.data(), count, [&](int64_t k) -> const std::string& { return items_[index[k]]; });
+    clock_.task_bytes += static_cast<double>(buf.size());
+    ++clock_.task_msgs;
+    trace().add('G', static_cast<double>(index[0]));
+    sender_.send(w, kTask, std::move(buf));
+  } else if (!ended_[w]) {
+    ended_[w] = 1;
+    --open_workers_;
+    sender_.send(w, kRoundEnd, std::string());
+  }
+  clock_.task_s += seconds_since(t0);
+}
+
+// the master's computing thread: its own items, one at a time, from the same queue
+void Master::compute_own() {
+  double secs = 0, cpu = 0;
+  long count = 0;
+  std::unique_lock lk(sh_.mu);
+  while (next_ < n_ && !sh_.error) {
+    const int64_t i = at(next_++);
+    out_.owner[i] = 0;
+    lk.unlock();
+    std::string r;
+    const double before = secs;
+    try {
+      r = timed_compute(compute_, items_[i], secs, cpu);
+    } catch (...) {
+      lk.lock();
+      sh_.error = std::current_exception();
+      break;
+    }
+    lk.lock();
+    sh_.own_s += secs - before, ++sh_.own_items;
+    out_.results[i] = std::move(r);
+    have_[i] = 1;
+    ++local_new_, ++count;
+    sh_.to_server.notify_one();
+  }
+  sh_.compute_s += secs;
+  sh_.compute_cpu_s += cpu;
+  sh_.items += count;
+  local_running_ = false;
+  sh_.to_server.notify_one();
+}
+
+void Master::serve() {
+  for (int k = 0; k < std::max(1, opt_.depth); ++k)
+    for (int w = 1; w < size_; ++w) give(w);
+  if (master_computes_ && n_ > 0) {
+    local_running_ = true;
+    local_ = std::thread([this] { compute_own(); });
+  }
   for (;;) {
-    bool active = false;
-    // tasks, matched in the order the master sent them, up to this farm's kRoundEnd and no further: the master
-    // may already be in the next farm (its broadcast of the item count completes without us), and a message
-    // matched here belongs to this farm (tests/mpi/scheduler_test.cpp, AWorkerLateForAFarmTakesOnlyThatFarmsMessages)
-    while (!end_matched) {
-      int flag = 0;
-      MPI_Message msg;
-      MPI_Status st;
-      MPI_Improbe(0, MPI_ANY_TAG, comm, &flag, &msg, &st);
-      if (!flag) break;
-      active = true;
-      trace().add('T', 0);
-      end_matched = st.MPI_TAG == kRoundEnd;
-      receiver.receive(msg, st);
+    bool active = take_results();
+    bool running = false;
+    if (take_own(running)) active = true;
+    sender_.reap();
+    if (done_ == n_ && open_workers_ == 0 && !running) break;
+    nap(active, running);
+  }
+  if (local_.joinable()) local_.join();
+  sender_.wait_all();
+  sh_.add_to(clock_);
+}
+
+// the workers' results that have arrived; whether there were any
+bool Master::take_results() {
+  bool active = false;
+  // Open MPI's probe (ob1) looks among the messages already matched in and only then advances its
+  // transports, so a result that arrived during a nap would be seen one look later (measured: the master
+  // took a tail result in 1.0-1.8 ms after it was sent, looking every 1.1 ms; 0.6 ms with this): advance
+  // first with a probe whose answer is not used, then take everything in
+  {
+    int ignored = 0;
+    MPI_Iprobe(MPI_ANY_SOURCE, kResult, comm_, &ignored, MPI_STATUS_IGNORE);
+  }
+  // every result that has arrived is answered at once with the worker's next block
+  for (;;) {
+    int flag = 0;
+    MPI_Message msg;
+    MPI_Status st;
+    MPI_Improbe(MPI_ANY_SOURCE, kResult, comm_, &flag, &msg, &st);
+    if (!flag) break;
+    active = true;
+    const auto t0 = Clock::now();
+    trace().add('R', 0);
+    receiver_.receive(msg, st);
+    clock_.result_s += seconds_since(t0);
+    --held_[st.MPI_SOURCE];
+    give(st.MPI_SOURCE);
+  }
+  for (const auto& m : receiver_.take()) {
+    active = true;
+    const auto t0 = Clock::now();
+    Block b = unpack_block(m->bytes.get());
+    const auto count = static_cast<int64_t>(b.data.size());
+    for (int64_t k = 0; k < count; ++k) out_.results[b.index[k]] = std::move(b.data[k]);
+    {
+      std::lock_guard lk(sh_.mu);
+      for (int64_t i : b.index) have_[i] = 1;
     }
-    for (const auto& m : receiver.take()) {
-      active = true;
-      if (m->tag == kRoundEnd) {
-        got_end = true;
-        continue;
-      }
-      Block b = unpack_block(m->bytes.get());
-      {
-        std::lock_guard lk(sh.mu);
-        queued.push_back(std::move(b));
-      }
-      sh.to_worker.notify_one();
+    clock_.result_bytes += static_cast<double>(m->size);
+    ++clock_.result_msgs;
+    clock_.results += count;
+    clock_.result_s += seconds_since(t0);
+    finished(count);
+  }
+  return active;
+}
+
+// the items the master's computing thread finished since the last look, and the results now folded in item
+// order; running: whether that thread is still at work. Whether it had finished any
+bool Master::take_own(bool& running) {
+  int64_t fresh = 0, fold_to = folded_;
+  std::exception_ptr error;
+  {
+    std::lock_guard lk(sh_.mu);
+    fresh = local_new_;
+    local_new_ = 0;
+    running = local_running_;
+    error = sh_.error;
+    if (opt_.on_result)
+      while (fold_to < n_ && have_[fold_to]) ++fold_to;
+  }
+  if (error) {
+    if (local_.joinable()) local_.join();
+    std::rethrow_exception(error);
+  }
+  if (fresh > 0) finished(fresh);
+  for (; folded_ < fold_to; ++folded_) opt_.on_result(folded_, out_.results[folded_]);
+  return fresh > 0;
+}
+
+void Master::finished(int64_t k) {
+  for (int64_t q = 0; q < k; ++q) {
+    ++done_;
+    if (opt_.progress) opt_.progress(static_cast<int>(done_), static_cast<int>(n_));
+  }
+}
+
+// between two looks at the messages: nothing (after activity that wants an answer soon), or a nap
+void Master::nap(bool active, bool running) {
+  // calm: this core's computing thread is at work, nothing of ours is in flight and no worker waits for
+  // its next item (the tail), so nothing here is urgent: the computing thread's next item wakes us, and a
+  // worker's result can wait half an item (it holds its next block)
+  const bool calm = running && sender_.empty() && receiver_.empty() && !in_tail(n_ - next_);
+  if (active && !calm) {
+    backoff_.reset();
+    return;
+  }
+  std::unique_lock lk(sh_.mu);
+  // in the round's tail a worker waits for its next item: look more often
+  const double mean_item_s = sh_.own_items > 0 ? sh_.own_s / static_cast<double>(sh_.own_items) : 0.0;
+  const auto how_long = calm ? std::chrono::microseconds(Backoff::calm_master_us(mean_item_s))
+                             : backoff_.next(in_tail(n_ - next_) ? Backoff::tail_us(mean_item_s) : Backoff::kMaxUs);
+  sh_.to_server.wait_for(lk, how_long, [&] { return local_new_ > 0 || sh_.error || (!local_running_ && running); });
+}
+
+// a worker's side of a farm(): takes the master's blocks in, computes them in a thread of their own and sends
+// each block's results back as soon as it is done
+class Worker {
+ public:
+  Worker(MPI_Comm comm, const Compute& compute, FarmResult& out, FarmClock& clock, bool own_core)
+      : comm_(comm), compute_(compute), out_(out), clock_(clock), own_core_(own_core), sender_(comm) {}
+  ~Worker() { finish_thread(); }
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+  // the whole round: every block taken in, computed and its results sent, up to the master's kRoundEnd
+  void serve();
+
+ private:
+  void compute_blocks();
+  void finish_thread();
+  bool take_tasks();
+  void send_results(std::deque<Block>& ready);
+  void nap(bool active, bool idle);
+
+  MPI_Comm comm_;
+  const Compute& compute_;
+  FarmResult& out_;
+  FarmClock& clock_;
+  const bool own_core_;
+  Shared sh_;  // a Block's data: its tasks, then their results
+  std::deque<Block> queued_, computed_;
+  bool busy_ = false, stop_ = false;
+  std::thread worker_;
+  Sender sender_;
+  Receiver receiver_;
+  bool got_end_ = false;
+  bool end_matched_ = false;  // this farm's kRoundEnd has been matched: what comes after it is the next farm's
+  Backoff backoff_;
+  Clock::time_point idle_since_{};
+  bool was_idle_ = false;
+};
+
+// the worker's computing thread: the queued blocks, one after the other
+void Worker::compute_blocks() {
+  double secs = 0, cpu = 0;
+  long count = 0;
+  std::unique_lock lk(sh_.mu);
+  for (;;) {
+    sh_.to_worker.wait(lk, [&] { return stop_ || !queued_.empty(); });
+    if (queued_.empty() || sh_.error) break;
+    Block b = std::move(queued_.front());
+    queued_.pop_front();
+    busy_ = true;
+    lk.unlock();
+    try {
+      for (std::string& x : b.data) x = timed_compute(compute_, x, secs, cpu), ++count;
+    } catch (...) {
+      lk.lock();
+      sh_.error = std::current_exception();
+      busy_ = false;
+      sh_.to_server.notify_one();
+      break;
     }
+    lk.lock();
+    busy_ = false;
+    computed_.push_back(std::move(b));
+    sh_.to_server.notify_one();
+  }
+  sh_.compute_s += secs;
+  sh_.compute_cpu_s += cpu;
+  sh_.items += count;
+}
+
+void Worker::finish_thread() {
+  {
+    std::lock_guard lk(sh_.mu);
+    stop_ = true;
+    queued_.clear();
+  }
+  sh_.to_worker.notify_one();
+  if (worker_.joinable()) worker_.join();
+}
+
+void Worker::serve() {
+  worker_ = std::thread([this] { compute_blocks(); });
+  for (;;) {
+    bool active = take_tasks();
     std::deque<Block> ready;
     bool idle = false;
     std::exception_ptr error;
     {
-      std::lock_guard lk(sh.mu);
-      ready.swap(computed);
-      idle = queued.empty() && !busy;
-      error = sh.error;
+      std::lock_guard lk(sh_.mu);
+      ready.swap(computed_);
+      idle = queued_.empty() && !busy_;
+      error = sh_.error;
     }
     if (error) std::rethrow_exception(error);
-    for (Block& b : ready) {  // results go out at once, without waiting for the master to take them
-      active = true;
-      const auto count = static_cast<int64_t>(b.data.size());
-      trace().add('S', static_cast<double>(b.index[0]));
-      sender.send(0, kResult, pack_block(b.index.data(), count, [&](int64_t k) -> const std::string& { return b.data[k]; }));
-      for (int64_t k = 0; k < count; ++k) out.results[b.index[k]] = std::move(b.data[k]);
-    }
-    sender.reap();
-    if (got_end && idle && ready.empty() && receiver.empty()) break;
-    // calm: the computing thread has a block, and nothing of ours is in flight: its finished block wakes
-    // us, and the master's next block can wait until then (we look every 10 ms all the same)
-    const bool calm = !idle && sender.empty() && receiver.empty();
-    // waiting for the next block with a core of our own and nothing to compute: look again at once, for a
-    // while (in a round's tail the master answers a result within about 0.5 ms; sleeping between looks
-    // added as much again to every item of the tail)
-    if (idle && !was_idle) idle_since = Clock::now();
-    was_idle = idle;
-    const bool spin = own_core && idle && !got_end && seconds_since(idle_since) < kSpinS;
-    if (spin) continue;
-    if (active && !calm) {
-      backoff.reset();
-    } else {
-      std::unique_lock lk(sh.mu);
-      const auto nap = calm ? std::chrono::microseconds(Backoff::kCalmWorkerUs) : backoff.next();
-      sh.to_server.wait_for(lk, nap, [&] { return !computed.empty() || sh.error; });
-    }
+    if (!ready.empty()) active = true;
+    send_results(ready);
+    sender_.reap();
+    if (got_end_ && idle && ready.empty() && receiver_.empty()) break;
+    nap(active, idle);
   }
   finish_thread();
-  sender.wait_all();
-  clock.compute_s += sh.compute_s;
-  clock.compute_cpu_s += sh.compute_cpu_s;
-  clock.items += sh.items;
+  sender_.wait_all();
+  sh_.add_to(clock_);
+}
+
+// the master's messages that have arrived, queued for the computing thread; whether there were any
+bool Worker::take_tasks() {
+  bool active = false;
+  // tasks, matched in the order the master sent them, up to this farm's kRoundEnd and no further: the master
+  // may already be in the next farm (its broadcast of the item count completes without us), and a message
+  // matched here belongs to this farm (tests/mpi/scheduler_test.cpp, AWorkerLateForAFarmTakesOnlyThatFarmsMessages)
+  while (!end_matched_) {
+    int flag = 0;
+    MPI_Message msg;
+    MPI_Status st;
+    MPI_Improbe(0, MPI_ANY_TAG, comm_, &flag, &msg, &st);
+    if (!flag) break;
+    active = true;
+    trace().add('T', 0);
+    end_matched_ = st.MPI_TAG == kRoundEnd;
+    receiver_.receive(msg, st);
+  }
+  for (const auto& m : receiver_.take()) {
+    active = true;
+    if (m->tag == kRoundEnd) {
+      got_end_ = true;
+      continue;
+    }
+    Block b = unpack_block(m->bytes.get());
+    {
+      std::lock_guard lk(sh_.mu);
+      queued_.push_back(std::move(b));
+    }
+    sh_.to_worker.notify_one();
+  }
+  return active;
+}
+
+// results go out at once, without waiting for the master to take them
+void Worker::send_results(std::deque<Block>& ready) {
+  for (Block& b : ready) {
+    const auto count = static_cast<int64_t>(b.data.size());
+    trace().add('S', static_cast<double>(b.index[0]));
+    sender_.send(0, kResult, pack_block(b.index.data(), count, [&](int64_t k) -> const std::string& { return b.data[k]; }));
+    for (int64_t k = 0; k < count; ++k) out_.results[b.index[k]] = std::move(b.data[k]);
+  }
+}
+
+// between two looks at the messages: nothing (after activity, or spinning for the next block), or a nap
+void Worker::nap(bool active, bool idle) {
+  // calm: the computing thread has a block, and nothing of ours is in flight: its finished block wakes
+  // us, and the master's next block can wait until then (we look every 10 ms all the same)
+  const bool calm = !idle && sender_.empty() && receiver_.empty();
+  // waiting for the next block with a core of our own and nothing to compute: look again at once, for a
+  // while (in a round's tail the master answers a result within about 0.5 ms; sleeping between looks
+  // added as much again to every item of the tail)
+  if (idle && !was_idle_) idle_since_ = Clock::now();
+  was_idle_ = idle;
+  const bool spin = own_core_ && idle && !got_end_ && seconds_since(idle_since_) < kSpinS;
+  if (spin) return;
+  if (active && !calm) {
+    backoff_.reset();
+    return;
+  }
+  std::unique_lock lk(sh_.mu);
+  const auto how_long = calm ? std::chrono::microseconds(Backoff::kCalmWorkerUs) : backoff_.next();
+  sh_.to_server.wait_for(lk, how_long, [&] { return !computed_.empty() || sh_.error; });
 }
 
 }  // namespace
@@ -738,8 +833,8 @@ FarmResult farm(MPI_Comm comm, const std::vector<std::string>& items,
   }
   out.results.assign(n, std::string());
   out.owner.assign(n, 0);
-  if (rank == 0) serve_master(comm, size, n, items, compute, opt, out, clock);
-  else serve_worker(comm, compute, out, clock, g_own_core);
+  if (rank == 0) Master(comm, size, n, items, compute, opt, out, clock).serve();
+  else Worker(comm, compute, out, clock, g_own_core).serve();
   if (n > 0) {
     MPI_Request req;
     MPI_Ibcast(out.owner.data(), static_cast<int>(n), MPI_INT, 0, comm, &req);
