@@ -25,8 +25,8 @@ inline constexpr sim::RunPhysics kSpec{};
 inline constexpr sim::ContactLaw kCoulomb = sim::ContactLaw::coulomb;
 // the weak and the strong connector of the default config (connectors.weak_stiffness, strong_stiffness,
 // amplitude, damping: the schema is their one home)
-inline collective::Tether weak_connector() { return collective::strength_tether(io::default_config().connectors, "weak"); }
-inline collective::Tether strong_connector() { return collective::strength_tether(io::default_config().connectors, "strong"); }
+inline collective::Tether weak_connector() { return collective::strength_tether(config::default_config().connectors, "weak"); }
+inline collective::Tether strong_connector() { return collective::strength_tether(config::default_config().connectors, "strong"); }
 
 // the project's shared folder (SPEC, parity scenes): the environment variable DIVCOLL_SHARED_DIR when set,
 // else the CMake cache variable of the same name (default: ../shared beside the checkout)

@@ -166,7 +166,7 @@ int bench(const BenchArgs& a) {
   std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
               divcoll::git_commit());
   Fixture f = make_fixture(24, 7);
-  f.tether = collective::strength_tether((a.config.empty() ? io::default_config() : io::load_config(a.config)).connectors, "weak");
+  f.tether = collective::strength_tether((a.config.empty() ? config::default_config() : config::load_config(a.config)).connectors, "weak");
 
   // ---- throughput --------------------------------------------------------------------------------
   std::printf("## Throughput: scene-steps per CPU-second of one core (the thread's CPU time, not wall time)\n\n");

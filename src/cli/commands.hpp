@@ -106,7 +106,7 @@ struct GradDiagArgs {
 int grad_diag(const GradDiagArgs& a);
 // a run file's config (with overrides) and final agents with their anchors (InputError if it has none)
 struct RunAgents {
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   std::vector<morph::Agent> agents;
   // how these commands run the run's episodes (the anchors' too): under its contact law (run.contact), the
   // networks in double whatever run.precision says

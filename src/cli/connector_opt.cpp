@@ -39,11 +39,11 @@ int connector_opt(const ConnectorOptArgs& a) {
     }
   }
   const RunAgents ra = load_run_agents(a.run, a.overrides);
-  const io::RunConfig& cfg = ra.cfg;
+  const config::RunConfig& cfg = ra.cfg;
   const std::vector<morph::Agent>& agents = ra.agents;
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
-  const collective::OptSettings os = collective::opt_settings(C);
+  const evo::OptSettings os = evo::opt_settings(C);
   DIVCOLL_THROW_UNLESS(a.eval_pairs <= pop, "--eval-pairs " << a.eval_pairs << " is more than the population");
 
   std::ofstream curves(curves_path), summary(summary_path);
@@ -54,23 +54,23 @@ int connector_opt(const ConnectorOptArgs& a) {
   const int R = C.replicates;
   for (size_t k = 0; k < C.kinds.size(); ++k) {
     const std::string& kind = C.kinds[k];
-    const bool diverse = io::connector_kind(kind).diverse;
+    const bool diverse = config::connector_kind(kind).diverse;
     const collective::Tether stiff = collective::tether(C, kind);
     std::vector<std::pair<int, int>> eval;
     if (diverse) {
-      Rng rng = make_rng(cfg.run.seed, io::stage_stream("deploy"), 0);  // the deployment's diverse pairs
+      Rng rng = make_rng(cfg.run.seed, config::stage_stream("deploy"), 0);  // the deployment's diverse pairs
       eval = collective::random_pairs(rng, pop, a.eval_pairs);
     } else {
       eval = collective::uniform_pairs(a.eval_pairs);
     }
     for (int r = 0; r < R; ++r) {
       const auto t0 = std::chrono::steady_clock::now();
-      const uint64_t stream = io::stage_stream("connectors") + k * R + r;  // the connectors stage's slot stream
-      Rng wr = make_rng(cfg.run.seed, stream, io::kItemInitialWeights);
-      collective::PlainTrainSpec spec{stiff,        ra.physics,      diverse,           C.iterations, C.batch_pairs,
+      const uint64_t stream = config::stage_stream("connectors") + k * R + r;  // the connectors stage's slot stream
+      Rng wr = make_rng(cfg.run.seed, stream, config::kItemInitialWeights);
+      evo::PlainTrainSpec spec{stiff,        ra.physics,      diverse,           C.iterations, C.batch_pairs,
                                       C.episode_steps, C.validation_pairs, cfg.run.seed, stream};
-      const collective::PlainTrainResult tr =
-          collective::train_plain(sim, agents, os, collective::initial_connector_params(C, stiff.amplitude, wr), spec);
+      const evo::PlainTrainResult tr =
+          evo::train_plain(sim, agents, os, collective::initial_connector_params(C, stiff.amplitude, wr), spec);
       const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       for (size_t i = 0; i < tr.val_bl.size(); ++i)
         curves << a.label << ',' << kind << ',' << r << ',' << i << ','
@@ -85,7 +85,7 @@ int connector_opt(const ConnectorOptArgs& a) {
                           collective::run_alone(sim, agents[q], "flat", ra.physics, T).travel_bl);
         alone /= static_cast<double>(eval.size());
         for (const auto& [name, w] : which) {
-          const collective::ProbeResult pr = collective::run_probe(sim, agents, eval, *w, false, stiff, ra.physics, T, 0);
+          const evo::ProbeResult pr = evo::run_probe(sim, agents, eval, *w, false, stiff, ra.physics, T, 0);
           summary << a.label << ',' << kind << ',' << r << ',' << name << ',' << tr.best_iteration << ',' << T << ','
                   << pr.travel_bl << ',' << alone << ',' << pr.not_ok << ',' << tr.pair_episodes_grad << ','
                   << tr.pair_episodes_fwd << ',' << secs << '\n';

@@ -47,9 +47,9 @@ int export_scene(const ExportArgs& a) {
   const io::h5::File f = io::h5::File::open(a.run);
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
                        a.run << " is not a divcoll run file");
-  const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
+  const config::RunConfig cfg = config::parse_config(f.read_string("config"), a.run + " (stored config)");
   // the episode's scene under the run's contact law (written into the scene file)
-  const sim::ContactLaw law = io::run_physics(cfg).contact;
+  const sim::ContactLaw law = config::run_physics(cfg).contact;
   std::vector<morph::Agent> agents;
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
   // pairs and chains need the anchors the connectors stage stored (the ones every stage used)

@@ -25,7 +25,7 @@ int gd_compare(const GdCompareArgs& a) {
               a.epochs, a.steps);
   std::printf("| rule | mean final | sd | min | max | mean drop from best seen | largest drop |\n|---|---|---|---|---|---|---|\n");
   for (const Variant& v : variants) {
-    evo::GdOptions opt = evo::gd_options(io::default_config().agents);
+    evo::GdOptions opt = evo::gd_options(config::default_config().agents);
     opt.epochs = a.epochs;
     opt.steps = a.steps;
     opt.rule = v.rule;

@@ -63,8 +63,8 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run",
                        run << " is not a divcoll run file");
   DIVCOLL_THROW_UNLESS(f.has("agents/final"), run << " has no final agent population (run the agents stage)");
-  RunAgents ra{io::apply_overrides(io::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}, {}};
-  ra.physics.contact = io::run_physics(ra.cfg).contact;  // the run's scenes under the run's contact law
+  RunAgents ra{config::apply_overrides(config::parse_config(f.read_string("config"), run + " (stored config)"), overrides), {}, {}};
+  ra.physics.contact = config::run_physics(ra.cfg).contact;  // the run's scenes under the run's contact law
   for (const auto& x : io::read_final_population(f)) ra.agents.push_back(x.agent);
   for (auto& ag : ra.agents) ag.anchors = collective::compute_anchors(ag, ra.physics);
   return ra;
@@ -72,9 +72,9 @@ RunAgents load_run_agents(const std::string& run, const std::vector<std::string>
 
 int grad_diag(const GradDiagArgs& a) {
   const RunAgents ra = load_run_agents(a.run, a.overrides);
-  const io::RunConfig& cfg = ra.cfg;
+  const config::RunConfig& cfg = ra.cfg;
   const std::vector<morph::Agent>& agents = ra.agents;
-  const auto kinds = io::connector_kind_names();
+  const auto kinds = config::connector_kind_names();
   int kind = -1;
   for (size_t k = 0; k < kinds.size(); ++k)
     if (kinds[k] == a.kind) kind = static_cast<int>(k);
@@ -86,12 +86,12 @@ int grad_diag(const GradDiagArgs& a) {
 
   const int pop = static_cast<int>(agents.size());
   const auto& C = cfg.connectors;
-  const bool diverse = io::connector_kind(a.kind).diverse;
+  const bool diverse = config::connector_kind(a.kind).diverse;
   const collective::Tether k = collective::tether(C, a.kind);
   DIVCOLL_THROW_UNLESS(diverse || a.pairs <= pop, "--pairs " << a.pairs << " is more than the population (" << pop << ")");
   // the stage's replicate 0 of this kind: its initial weights and its first batch
-  const uint64_t stream = io::stage_stream("connectors") + static_cast<uint64_t>(kind) * C.replicates;
-  Rng wr = make_rng(cfg.run.seed, stream, io::kItemInitialWeights);
+  const uint64_t stream = config::stage_stream("connectors") + static_cast<uint64_t>(kind) * C.replicates;
+  Rng wr = make_rng(cfg.run.seed, stream, config::kItemInitialWeights);
   std::vector<double> theta = collective::initial_connector_params(C, k.amplitude, wr);
   std::vector<std::pair<int, int>> batch;
   if (diverse) {
@@ -103,9 +103,9 @@ int grad_diag(const GradDiagArgs& a) {
   sim::Simulator sim;
   if (a.train_iterations > 0) {
     // first train with the run's (or the overridden) connector settings, as the stage would
-    collective::PlainTrainSpec ts{k, ra.physics, diverse, a.train_iterations, a.pairs, C.episode_steps, 0, cfg.run.seed,
+    evo::PlainTrainSpec ts{k, ra.physics, diverse, a.train_iterations, a.pairs, C.episode_steps, 0, cfg.run.seed,
                                   stream};
-    const auto tr = collective::train_plain(sim, agents, collective::opt_settings(C), theta, ts);
+    const auto tr = evo::train_plain(sim, agents, evo::opt_settings(C), theta, ts);
     theta = tr.params;
     std::printf("trained %d iterations (%s, lr %g): batch travel %.3f -> %.3f BL\n\n", a.train_iterations,
                 C.optimizer.c_str(), C.lr, tr.curve_bl.front(), tr.curve_bl.back());
@@ -119,7 +119,7 @@ int grad_diag(const GradDiagArgs& a) {
               "J(θ+hĝ) − J(θ) of a step of length h along the gradient (u; > 0 = uphill).\n\n");
 
   auto J = [&](const std::vector<double>& w, int steps) {
-    return collective::run_probe(sim, agents, batch, w, false, k, ra.physics, steps, 0).travel_u;
+    return evo::run_probe(sim, agents, batch, w, false, k, ra.physics, steps, 0).travel_u;
   };
   for (int T : horizons) {
     // per-pair gradients: their norms and the agreement of the batch's two halves
@@ -127,7 +127,7 @@ int grad_diag(const GradDiagArgs& a) {
     opt.steps = T;
     opt.grad = true;
     opt.agent_param_grad = false;
-    collective::ProbeSum all, h1, h2;
+    evo::ProbeSum all, h1, h2;
     std::vector<double> pair_norms;
     for (size_t p = 0; p < batch.size(); ++p) {
       const collective::PairOutcome o =
@@ -136,7 +136,7 @@ int grad_diag(const GradDiagArgs& a) {
       (2 * p < batch.size() ? h1 : h2).add(o);
       if (o.status == sim::Status::ok) pair_norms.push_back(norm(o.grad));
     }
-    const collective::ProbeResult r = all.mean();
+    const evo::ProbeResult r = all.mean();
     DIVCOLL_THROW_UNLESS(r.ok > 0, "every pair of the batch failed at horizon " << T);
     std::sort(pair_norms.begin(), pair_norms.end());
     const std::vector<double>& g = r.grad;
@@ -146,7 +146,7 @@ int grad_diag(const GradDiagArgs& a) {
     std::printf("|g| = %.4g; per-pair |g|: median %.4g, max %.4g; cos(g of first half, g of second half) = %.3f\n",
                 gn, pair_norms[pair_norms.size() / 2], pair_norms.back(), cosine(h1.mean().grad, h2.mean().grad));
     if (a.window > 0 && a.window < T) {
-      const auto tr = collective::run_probe(sim, agents, batch, theta, true, k, ra.physics, T, a.window);
+      const auto tr = evo::run_probe(sim, agents, batch, theta, true, k, ra.physics, T, a.window);
       std::printf("truncated backpropagation, window %d: |g_W| = %.4g, cos(g_W, g) = %.3f\n", a.window, norm(tr.grad),
                   cosine(tr.grad, g));
     }

@@ -24,7 +24,7 @@ namespace {
 
 // the stages --from may name: every stage of DIVCOLL_STAGES but the first (agents is never recomputed on a copy)
 std::vector<std::string> from_stages() {
-  const std::vector<std::string>& all = io::stage_names();
+  const std::vector<std::string>& all = config::stage_names();
   return std::vector<std::string>(all.begin() + 1, all.end());
 }
 
@@ -192,7 +192,7 @@ std::vector<Command> commands() {
       command<NoArgs>(
           "keys", "every config key with its type, default, allowed range, unit and meaning (markdown)",
           [](CLI::App&, NoArgs&) {},
-          [](const NoArgs&) { return std::printf("%s", io::schema_markdown().c_str()) < 0 ? 1 : 0; }),
+          [](const NoArgs&) { return std::printf("%s", config::schema_markdown().c_str()) < 0 ? 1 : 0; }),
 
       command<SchemaArgs>(
           "schema", "every group and dataset of a run file: type, axes, unit, meaning (markdown)",

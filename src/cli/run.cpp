@@ -65,7 +65,7 @@ void derive_run_file(const std::string& base, const std::string& path, const std
 
 // the tape of the longest episode with gradients of the stages that run: every rank's simulator holds
 // one, so the ranks on a node share run.memory_limit_gb (default 80% of rank 0's MemAvailable)
-void check_memory(MPI_Comm comm, const io::RunConfig& cfg, const RunArgs& args) {
+void check_memory(MPI_Comm comm, const config::RunConfig& cfg, const RunArgs& args) {
   MPI_Comm node;
   MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
   int per_node = 1;
@@ -101,9 +101,9 @@ void check_run_output(const std::string& path, const RunArgs& args) {
 
 
 // the command line, the config, the output and --from's base (every rank checks; prepare agrees the verdict)
-void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
+void check_request(const RunArgs& args, config::RunConfig& cfg, std::string& path) {
   namespace fs = std::filesystem;
-  cfg = io::load_config(args.config, args.overrides);
+  cfg = config::load_config(args.config, args.overrides);
   path = args.out.empty() ? (fs::path(cfg.output.dir) / (cfg.run.name + ".h5")).string() : args.out;
   DIVCOLL_THROW_UNLESS(!(args.resume && args.force), "--resume and --force contradict each other");
   DIVCOLL_THROW_UNLESS(args.from.empty() == args.base.empty(), "--from STAGE and --base RUN.h5 go together");
@@ -116,13 +116,13 @@ void check_request(const RunArgs& args, io::RunConfig& cfg, std::string& path) {
     std::string why;
     DIVCOLL_THROW_UNLESS(mpi::valid_run_file(args.base, &why), "--base " << args.base << " is not a usable run file: " << why);
     io::h5::File f = io::h5::File::open(args.base);
-    const io::RunConfig before = io::parse_config(f.read_string("config"), args.base + " (stored config)");
-    const std::string diff = io::incompatible_keys(before, cfg, args.from);
+    const config::RunConfig before = config::parse_config(f.read_string("config"), args.base + " (stored config)");
+    const std::string diff = config::incompatible_keys(before, cfg, args.from);
     if (!diff.empty())
       throw InputError(msg() << "--from " << args.from << " reuses the earlier stages of " << args.base
                              << ", so their keys must be the same:" << diff);
-    for (const std::string& s : io::sections_before(args.from))
-      if (io::stage_enabled(cfg, s))
+    for (const std::string& s : config::sections_before(args.from))
+      if (config::stage_enabled(cfg, s))
         DIVCOLL_THROW_UNLESS(mpi::complete(f, s),
                              "--from " << args.from << ": stage " << s << " is not complete in " << args.base);
   }
@@ -158,14 +158,14 @@ io::WriterLock lock_run_file(const std::string& path, int rank, int size) {
 
 // rank 0: a run resumes only with the config it started with, but for the keys that choose what runs now or how it
 // reports (checked read-only, before anything is opened for writing)
-void check_resume_config(const std::string& path, const io::RunConfig& cfg) {
+void check_resume_config(const std::string& path, const config::RunConfig& cfg) {
   std::string diff;
   io::h5::File f = io::h5::File::open(path);
   if (!f.has_attribute("format") || f.read_string("format") != "divcoll-run" || !f.has_attribute("config")) {
     diff = " (not a divcoll run file)";
   } else {
-    const io::RunConfig before = io::parse_config(f.read_string("config"), path + " (stored config)");
-    const auto a = io::flat(before), b = io::flat(cfg);
+    const config::RunConfig before = config::parse_config(f.read_string("config"), path + " (stored config)");
+    const auto a = config::flat(before), b = config::flat(cfg);
     // keys that choose what runs now or how it reports, not what it computes, may change
     const std::set<std::string> free = {"run.stages", "run.progress_every_s", "run.stop_grace_s", "run.memory_limit_gb", "output.dir",
                                         "output.checkpoint_every", "output.checkpoint_interval_s"};
@@ -178,7 +178,7 @@ void check_resume_config(const std::string& path, const io::RunConfig& cfg) {
 
 // what the checks leave for the work: the config, the run file's path, whether the file is continued, its lock
 struct Prepared {
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   std::string path;
   bool existing = false;
   io::WriterLock lock;
@@ -208,7 +208,7 @@ void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
     // a copy of the base's earlier stages is made now and continued like a resumed run
     mpi::agree_rank0(MPI_COMM_WORLD, [&] {
       try {
-        derive_run_file(args.base, p.path, args.from, io::to_toml(p.cfg));
+        derive_run_file(args.base, p.path, args.from, config::to_toml(p.cfg));
       } catch (const std::exception& e) {
         throw InputError(msg() << "cannot make " << p.path << " from " << args.base << ": " << e.what());
       }
@@ -220,7 +220,7 @@ void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
 
 // a new run file is made under a temporary name and renamed into place when its provenance is written, so a file
 // at `path` is always a complete run file (and gets a checkpoint at once)
-void create_run_file(const std::string& path, const io::RunConfig& cfg, const std::string& toml, hid_t fapl, int rank) {
+void create_run_file(const std::string& path, const config::RunConfig& cfg, const std::string& toml, hid_t fapl, int rank) {
   namespace fs = std::filesystem;
   const std::string tmp = path + ".new";
   {
@@ -264,11 +264,11 @@ int run_session(const RunArgs& args) {
     if (rank == 0) std::fprintf(stderr, "divcoll: error: %s\n", e.what());
     return 2;
   }
-  const io::RunConfig& cfg = p.cfg;
+  const config::RunConfig& cfg = p.cfg;
   const std::string& path = p.path;
 
   try {
-    const std::string toml = io::to_toml(cfg);
+    const std::string toml = config::to_toml(cfg);
     io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
     H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
     // the file's metadata is written collectively at a flush (one MPI-IO write) instead of by rank 0 in small

@@ -98,13 +98,13 @@ int simulate(const SimulateArgs& a) {
 
 int scene(const SceneArgs& a) {
   check_output_path(a.out, a.force);
-  io::environment_table(a.env);  // refuses an unknown name before any work
+  config::environment_table(a.env);  // refuses an unknown name before any work
   DIVCOLL_THROW_UNLESS(a.kind == "agent" || a.kind == "pair" || a.kind == "chain",
                        "--kind must be agent, pair or chain (got '" << a.kind << "')");
-  const io::RunConfig cfg = a.config.empty() ? io::default_config() : io::load_config(a.config);
+  const config::RunConfig cfg = a.config.empty() ? config::default_config() : config::load_config(a.config);
   const collective::Tether k = collective::strength_tether(cfg.connectors, a.connector);
   // the config's contact law (run.contact) for the scene and the anchors' runs; the networks in double
-  const sim::RunPhysics physics{io::run_physics(cfg).contact, false};
+  const sim::RunPhysics physics{config::run_physics(cfg).contact, false};
   const int n = a.kind == "agent" ? 1 : a.kind == "pair" ? 2 : a.agents;
   DIVCOLL_THROW_UNLESS(a.kind != "chain" || (a.agents >= 2 && a.agents <= 1000),
                        "--agents for a chain must lie in [2, 1000] (got " << a.agents << ")");
@@ -167,7 +167,7 @@ int median_pair(const std::string& run, int* n_ok, double* median_bl) {
 
 int demo(const DemoArgs& a) {
   namespace fs = std::filesystem;
-  io::environment_table(a.env);
+  config::environment_table(a.env);
   fs::create_directories(a.out);
   std::vector<std::pair<std::string, std::string>> episodes;  // scene, trajectory
   if (!a.run.empty()) {
@@ -188,7 +188,7 @@ int demo(const DemoArgs& a) {
       const int rc = export_scene(ex);  // prints what the run file records for the episode
       DIVCOLL_THROW_UNLESS(rc == 0, "divcoll export failed for " << env);
       const io::h5::File f = io::h5::File::open(a.run);
-      const io::RunConfig cfg = io::parse_config(f.read_string("config"), a.run + " (stored config)");
+      const config::RunConfig cfg = config::parse_config(f.read_string("config"), a.run + " (stored config)");
       const auto envs = io::split(f.group("deploy").read_string("environments"));
       const auto types = io::split(f.group("deploy").read_string("types"));
       const int e = static_cast<int>(std::find(envs.begin(), envs.end(), env) - envs.begin());
@@ -230,7 +230,7 @@ int demo(const DemoArgs& a) {
                 "pass --run RUN.h5 for a run's trained ones)\n");
     std::printf("%-12s %10s %10s %10s  %s\n", "environment", "travel_u", "travel_BL", "status", "scene file");
     for (const std::string& env : {std::string("flat"), a.env}) {
-      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(io::default_config().connectors, "weak"), env,
+      const sim::Scene s = collective::pair_scene(P, A, conn, collective::strength_tether(config::default_config().connectors, "weak"), env,
                                                   physics.contact);
       const std::string path = (fs::path(a.out) / ("pair_" + env + "_scene.h5")).string();
       io::write_scene(path, s, /*overwrite=*/true);  // the demo folder is scratch: rerunning replaces it
@@ -264,7 +264,7 @@ int envs() {
   std::printf("%-12s", "name");
   for (const sim::EnvironmentField& f : sim::kEnvironmentFields) std::printf(" %*s", std::max<int>(7, std::strlen(f.name)), f.name);
   std::printf("  %s\n", "terrain (dx, y, slope) from x_f");
-  for (const auto& t : io::builtin_environments()) {
+  for (const auto& t : config::builtin_environments()) {
     const auto& e = t.physics;
     std::string ter;
     for (const auto& s : t.relative) {

@@ -80,7 +80,7 @@ void append_connector(sim::Scene& s, int p, int q, const Anchors& P, const Ancho
 void place_env(sim::Scene& s, const std::string& env, sim::ContactLaw law, double feature_offset = 0) {
   double mx = s.x0[0];
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset, law);
+  s.env = config::place_environment(config::environment_table(env), feature_offset == 0 ? mx : mx + feature_offset, law);
 }
 
 }  // namespace

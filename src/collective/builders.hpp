@@ -37,7 +37,7 @@ Agent random_agent(Rng& rng, const sim::Constants& c = {});
 Agent make_agent(uint32_t cells, uint32_t springs, Rng& rng, const sim::Constants& c = {});
 
 // Every scene below is placed in a named built-in environment under the contact law `law` (the run's: sim::RunPhysics,
-// io::run_physics), which the scene then carries (sim::Environment::contact).
+// config::run_physics), which the scene then carries (sim::Environment::contact).
 
 // an agent alone in the named built-in environment, its lowest mass at y = 0 and min x = 0
 // feature_offset: the environment's features start this much further ahead (deploy.feature_placement)

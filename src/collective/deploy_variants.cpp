@@ -8,24 +8,24 @@
 
 namespace divcoll::collective {
 
-Tether tether(const io::RunConfig::Connectors& connectors, std::string_view kind) {
-  return {connectors.follower ? 0.0 : io::stiffness(connectors, kind), connectors.amplitude, connectors.damping};
+Tether tether(const config::RunConfig::Connectors& connectors, std::string_view kind) {
+  return {connectors.follower ? 0.0 : config::stiffness(connectors, kind), connectors.amplitude, connectors.damping};
 }
 
-Tether strength_tether(const io::RunConfig::Connectors& connectors, std::string_view strength) {
-  return {connectors.follower ? 0.0 : io::strength_stiffness(connectors, strength), connectors.amplitude,
+Tether strength_tether(const config::RunConfig::Connectors& connectors, std::string_view strength) {
+  return {connectors.follower ? 0.0 : config::strength_stiffness(connectors, strength), connectors.amplitude,
           connectors.damping};
 }
 
-std::vector<std::pair<int, int>> deploy_uniform_pairs(const io::RunConfig::Deploy& deploy,
-                                                      const io::RunConfig::Connectors& connectors) {
+std::vector<std::pair<int, int>> deploy_uniform_pairs(const config::RunConfig::Deploy& deploy,
+                                                      const config::RunConfig::Connectors& connectors) {
   std::vector<std::pair<int, int>> p = uniform_pairs(deploy.pairs);
   if (deploy.uniform_agents == "held_out")
     for (auto& [a, b] : p) a += connectors.batch_pairs, b += connectors.batch_pairs;
   return p;
 }
 
-double alone_feature_offset(const io::RunConfig::Deploy& deploy, const Agent& a) {
+double alone_feature_offset(const config::RunConfig::Deploy& deploy, const Agent& a) {
   const std::string& f = deploy.feature_placement;
   if (f == "pair_mean") return 0.5 * (body_length(a) + kAgentGap);
   if (f == "rear") return body_length(a) + kAgentGap;

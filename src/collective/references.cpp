@@ -20,14 +20,14 @@ std::vector<double> follower_connector_params(double amplitude) {
   return p;
 }
 
-std::vector<double> initial_connector_params(const io::RunConfig::Connectors& connectors, double amplitude, Rng& rng) {
+std::vector<double> initial_connector_params(const config::RunConfig::Connectors& connectors, double amplitude, Rng& rng) {
   if (connectors.init != "follower") return morph::init_connector_params(rng, connectors.init_out_gain);
   std::vector<double> w = follower_connector_params(amplitude);
   for (double& x : w) x += connectors.init_noise * normal(rng);
   return w;
 }
 
-ReferenceConnector reference_connector(const io::RunConfig::Connectors& connectors, std::string_view name) {
+ReferenceConnector reference_connector(const config::RunConfig::Connectors& connectors, std::string_view name) {
   ReferenceConnector r{std::string(name), tether(connectors, "weak_uniform"),
                        std::vector<double>(sim::connector_param_count(), 0.0)};
   if (name == "free") {

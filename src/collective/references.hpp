@@ -36,7 +36,7 @@ std::vector<double> follower_connector_params(double amplitude);
 // the weights a connector's training starts from (connectors.init): random = morph::init_connector_params with
 // connectors.init_out_gain; follower = follower_connector_params(amplitude) plus N(0, init_noise²) per weight, drawn
 // in storage order from `rng`
-std::vector<double> initial_connector_params(const io::RunConfig::Connectors& connectors, double amplitude, Rng& rng);
+std::vector<double> initial_connector_params(const config::RunConfig::Connectors& connectors, double amplitude, Rng& rng);
 
 // reference `name` (one of kReferenceConnectors) built from the [connectors] section
 struct ReferenceConnector {
@@ -44,6 +44,6 @@ struct ReferenceConnector {
   Tether tether;
   std::vector<double> weights;  // sim::connector_param_count() values
 };
-ReferenceConnector reference_connector(const io::RunConfig::Connectors& connectors, std::string_view name);
+ReferenceConnector reference_connector(const config::RunConfig::Connectors& connectors, std::string_view name);
 
 }  // namespace divcoll::collective

@@ -20,7 +20,7 @@
 #include "config/toml_doc.hpp"
 #include "config/toml_parse.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 namespace {
 
 // ---- the schema --------------------------------------------------------------------------------
@@ -1127,4 +1127,4 @@ sim::RunPhysics run_physics(const RunConfig& cfg) {
   return p;
 }
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

@@ -13,7 +13,7 @@
 
 #include "sim/engine.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 // every value of a run; get one from default_config() or parse_config(), never from a bare RunConfig{}
 // (that is all zeros and fails validate)
@@ -187,4 +187,4 @@ std::string schema_markdown();
 // is not a law or a precision
 sim::RunPhysics run_physics(const RunConfig& cfg);
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

@@ -8,7 +8,7 @@
 #include "common/check.hpp"
 #include "config/toml_parse.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 namespace {
 
 // every scalar key with its allowed range: sim::kEnvironmentFields (documented in configs/environments.toml)
@@ -136,4 +136,4 @@ sim::Environment place_environment(const EnvironmentTable& table, double max_x0,
   return env;
 }
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

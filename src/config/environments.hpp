@@ -6,7 +6,7 @@
 
 #include "sim/scene.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 // one table of environments.toml: constants plus terrain relative to the scene front x_f
 struct EnvironmentTable {
@@ -33,7 +33,7 @@ const EnvironmentTable& environment_table(const std::string& name);
 
 // the environment placed for a scene whose largest initial x is `max_x0`:
 // features start at x_f = max_x0 + 0.05 (SPEC §3); the first segment is flat ground at y = 0;
-// its contact law is `law` (the run's run.contact: io::run_physics)
+// its contact law is `law` (the run's run.contact: config::run_physics)
 sim::Environment place_environment(const EnvironmentTable& table, double max_x0, sim::ContactLaw law);
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

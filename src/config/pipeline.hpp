@@ -13,7 +13,7 @@
 #include "common/check.hpp"
 #include "config/config.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 // ---- stages --------------------------------------------------------------------------------------
 // The one stage list, in the order the stages run: X(name, first random stream id, the stages whose results
@@ -92,4 +92,4 @@ inline double strength_stiffness(const RunConfig::Connectors& c, std::string_vie
   throw InputError(msg() << "--connector must be weak or strong (got '" << strength << "')");
 }
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

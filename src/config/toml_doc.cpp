@@ -4,7 +4,7 @@
 
 #include "config/toml_parse.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 TomlSyntaxError::TomlSyntaxError(const std::string& origin, const std::string& reason_, int line_)
     : InputError(origin + ": " + reason_ + " at line " + std::to_string(line_)), reason(reason_), line(line_) {}
@@ -142,4 +142,4 @@ std::string toml_text(const TomlValue& table) {
   return out.str();
 }
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

@@ -10,7 +10,7 @@
 
 #include "common/check.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 // a TOML text that does not parse: what() is "<origin>: <the library's reason> at line <line>"
 struct TomlSyntaxError : InputError {
@@ -53,4 +53,4 @@ TomlValue parse_toml(const std::string& text, const std::string& origin);
 // a table as the library writes it
 std::string toml_text(const TomlValue& table);
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

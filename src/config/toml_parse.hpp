@@ -5,9 +5,9 @@
 
 #include <string>
 
-namespace divcoll::io {
+namespace divcoll::config {
 
 // `text` parsed; TomlSyntaxError (config/toml_doc.hpp) naming `origin`, the reason and the line if it does not parse
 toml::table parse_toml_table(const std::string& text, const std::string& origin);
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

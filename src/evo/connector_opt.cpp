@@ -11,7 +11,7 @@
 #include "common/check.hpp"
 #include "common/rng.hpp"
 
-namespace divcoll::collective {
+namespace divcoll::evo {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -38,7 +38,7 @@ double scheduled_lr(const OptSettings& s, int it, int iterations) {
   return s.lr;
 }
 
-void ProbeSum::add(const PairOutcome& o) {
+void ProbeSum::add(const collective::PairOutcome& o) {
   redone += o.redone_in_double ? 1 : 0;
   if (o.status != sim::Status::ok || !std::isfinite(o.travel_u)) {
     ++not_ok;
@@ -87,7 +87,7 @@ ConnectorOptimizer::ConnectorOptimizer(const OptSettings& s, std::vector<double>
   if (s_.optimizer == "cmaes") {
     es_ = std::make_unique<Es>();
     es_->lambda = s_.es_popsize;
-    Rng rng = make_rng(seed_, stream_, io::kItemCmaesSeed);
+    Rng rng = make_rng(seed_, stream_, config::kItemCmaesSeed);
     const unsigned es_seed = static_cast<unsigned>(rng() >> 32);
     es_->cmaes = std::make_unique<Cmaes>(params_, es_->lambda, s_.es_sigma, es_seed);
   }
@@ -106,7 +106,7 @@ std::vector<Probe> ConnectorOptimizer::ask(int it) {
   if (s_.optimizer == "es") {
     // popsize/2 antithetic pairs θ ± σε, forward only
     eps_.clear();
-    Rng rng = make_rng(seed_, stream_, io::kItemEsPerturbation + static_cast<uint64_t>(it));
+    Rng rng = make_rng(seed_, stream_, config::kItemEsPerturbation + static_cast<uint64_t>(it));
     for (int j = 0; j < s_.es_popsize / 2; ++j) {
       std::vector<double> e(params_.size());
       for (double& x : e) x = normal(rng);
@@ -122,7 +122,7 @@ std::vector<Probe> ConnectorOptimizer::ask(int it) {
   if (S <= 1) return {{params_, true}};
   // antithetic pairs θ + σε, θ − σε (and θ itself when S is odd)
   eps_.clear();
-  Rng rng = make_rng(seed_, stream_, io::kItemGradPerturbation + static_cast<uint64_t>(it));
+  Rng rng = make_rng(seed_, stream_, config::kItemGradPerturbation + static_cast<uint64_t>(it));
   for (int j = 0; j < S / 2; ++j) {
     std::vector<double> e(params_.size());
     for (double& x : e) x = s_.grad_sigma * normal(rng);
@@ -257,8 +257,8 @@ void ConnectorOptimizer::restore(const State& st, int done) {
 std::vector<std::pair<int, int>> validation_pairs(bool diverse, int n, int batch_pairs, int population, uint64_t seed,
                                                   uint64_t stream) {
   if (diverse) {
-    Rng rng = make_rng(seed, stream, io::kItemValidationPairs);
-    return random_pairs(rng, population, n);
+    Rng rng = make_rng(seed, stream, config::kItemValidationPairs);
+    return collective::random_pairs(rng, population, n);
   }
   std::vector<std::pair<int, int>> p;
   for (int j = 0; j < n; ++j) {
@@ -268,9 +268,9 @@ std::vector<std::pair<int, int>> validation_pairs(bool diverse, int n, int batch
   return p;
 }
 
-ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
+ProbeResult run_probe(sim::Simulator& sim, const std::vector<morph::Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
+                      const collective::Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
                       double pair_clip) {
   sim::RunOptions opt = physics.options();
   opt.steps = steps;
@@ -279,11 +279,11 @@ ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
   opt.grad_window = bptt_window;
   ProbeSum sum;
   sum.pair_clip = pair_clip;
-  for (const auto& [a, b] : pairs) sum.add(run_pair(sim, agents[a], agents[b], weights, tether, "flat", physics.contact, opt, nullptr));
+  for (const auto& [a, b] : pairs) sum.add(collective::run_pair(sim, agents[a], agents[b], weights, tether, "flat", physics.contact, opt, nullptr));
   return sum.mean();
 }
 
-PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agents, const OptSettings& s,
+PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<morph::Agent>& agents, const OptSettings& s,
                              std::vector<double> init, const PlainTrainSpec& spec) {
   const int pop = static_cast<int>(agents.size());
   ConnectorOptimizer opt(s, std::move(init), spec.iterations, spec.seed, spec.stream);
@@ -300,9 +300,9 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
     std::vector<std::pair<int, int>> batch;
     if (spec.diverse) {
       Rng rng = make_rng(spec.seed, spec.stream, static_cast<uint64_t>(it));
-      batch = random_pairs(rng, pop, spec.batch_pairs);
+      batch = collective::random_pairs(rng, pop, spec.batch_pairs);
     } else {
-      batch = uniform_pairs(spec.batch_pairs);
+      batch = collective::uniform_pairs(spec.batch_pairs);
     }
     std::vector<ProbeResult> rs;
     for (const Probe& p : opt.ask(it)) {
@@ -324,4 +324,4 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agen
   return out;
 }
 
-}  // namespace divcoll::collective
+}  // namespace divcoll::evo

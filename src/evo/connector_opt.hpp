@@ -34,10 +34,10 @@
 #include "evo/optim.hpp"
 #include "config/pipeline.hpp"
 
-namespace divcoll::collective {
+namespace divcoll::evo {
 
 // the [connectors] keys the optimizer reads, taken from the section by opt_settings (the config's schema holds
-// their defaults: opt_settings(io::default_config().connectors)); a test or a command may then change them
+// their defaults: opt_settings(config::default_config().connectors)); a test or a command may then change them
 struct OptSettings {
   std::string optimizer;    // adam | normalized | cmaes | es
   double lr{}, clip_norm{};
@@ -51,7 +51,7 @@ struct OptSettings {
   double es_sigma{};        // cmaes initial sd per weight; es perturbation sd per weight
   std::string clip;         // global | per_pair: clip_norm clips the batch mean or each pair's gradient
 };
-inline OptSettings opt_settings(const io::RunConfig::Connectors& c) {
+inline OptSettings opt_settings(const config::RunConfig::Connectors& c) {
   return {c.optimizer,    c.lr,          c.clip_norm, c.lr_schedule, c.lr_final,  c.bptt_window,
           c.grad_samples, c.grad_sigma,  c.keep_best, c.es_popsize,  c.es_sigma, c.clip};
 }
@@ -86,7 +86,7 @@ struct ProbeSum {
   double su = 0, sb = 0;
   int ok = 0, not_ok = 0, bad_grad = 0, redone = 0;
   std::vector<double> g;
-  void add(const PairOutcome& o);
+  void add(const collective::PairOutcome& o);
   ProbeResult mean() const;
 };
 
@@ -97,7 +97,7 @@ struct Probe {
 
 class ConnectorOptimizer {
  public:
-  // `seed`, `stream`: the slot's random stream (its items: io::kItem* in src/config/pipeline.hpp)
+  // `seed`, `stream`: the slot's random stream (its items: config::kItem* in src/config/pipeline.hpp)
   ConnectorOptimizer(const OptSettings& s, std::vector<double> init, int iterations, uint64_t seed, uint64_t stream);
   ~ConnectorOptimizer();
   ConnectorOptimizer(ConnectorOptimizer&&) noexcept;
@@ -166,19 +166,19 @@ struct PlainTrainResult {
   long pair_episodes_grad = 0, pair_episodes_fwd = 0;  // the compute spent
 };
 struct PlainTrainSpec {
-  Tether tether{};  // stiffness, amplitude and dashpot from the run config (collective::tether), always given
-  sim::RunPhysics physics{};  // the contact law and precision of every episode (io::run_physics), always given
+  collective::Tether tether{};  // stiffness, amplitude and dashpot from the run config (collective::tether), always given
+  sim::RunPhysics physics{};  // the contact law and precision of every episode (config::run_physics), always given
   bool diverse = false;
   int iterations = 0, batch_pairs = 0, episode_steps = 1000, validation_pairs = 0;  // 0 = no validation
   uint64_t seed = 1, stream = 0;
 };
-PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<Agent>& agents, const OptSettings& s,
+PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<morph::Agent>& agents, const OptSettings& s,
                              std::vector<double> init, const PlainTrainSpec& spec);
 
 // one probe over a list of pairs in a plain loop (grad with the window of `s`), each episode under `physics`
-ProbeResult run_probe(sim::Simulator& sim, const std::vector<Agent>& agents,
+ProbeResult run_probe(sim::Simulator& sim, const std::vector<morph::Agent>& agents,
                       const std::vector<std::pair<int, int>>& pairs, const std::vector<double>& weights, bool grad,
-                      const Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
+                      const collective::Tether& tether, const sim::RunPhysics& physics, int steps, int bptt_window,
                       double pair_clip = 0);
 
-}  // namespace divcoll::collective
+}  // namespace divcoll::evo

@@ -7,7 +7,7 @@
 
 #include "common/check.hpp"
 
-namespace divcoll::collective {
+namespace divcoll::evo {
 namespace {
 
 // the fitness pagmo asks for: recorded (ask: any value returned), then looked up in the same order (tell).
@@ -82,4 +82,4 @@ void Cmaes::tell(const std::vector<double>& fitness) {
   impl_->asked = false;
 }
 
-}  // namespace divcoll::collective
+}  // namespace divcoll::evo

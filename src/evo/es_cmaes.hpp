@@ -11,7 +11,7 @@
 #include <memory>
 #include <vector>
 
-namespace divcoll::collective {
+namespace divcoll::evo {
 
 class Cmaes {
  public:
@@ -28,4 +28,4 @@ class Cmaes {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace divcoll::collective
+}  // namespace divcoll::evo

@@ -13,7 +13,7 @@
 namespace divcoll::evo {
 
 // the [agents] keys mutation reads, taken from the section by mutation_options (defaults: the config's schema,
-// mutation_options(io::default_config().agents))
+// mutation_options(config::default_config().agents))
 struct MutationOptions {
   double body_flip_p{};
   double spring_flip_p{};
@@ -22,7 +22,7 @@ struct MutationOptions {
   bool springs_fixed{};     // graded diversity: the spring genotype never mutates
   bool rest_moves{};        // rest positions are jittered (and trained)
 };
-inline MutationOptions mutation_options(const io::RunConfig::Agents& a) {
+inline MutationOptions mutation_options(const config::RunConfig::Agents& a) {
   return {a.body_flip_p, a.spring_flip_p, a.rest_jitter_sd, a.body_fixed, a.springs_fixed, a.rest_moves};
 }
 

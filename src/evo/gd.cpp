@@ -11,7 +11,7 @@
 
 namespace divcoll::evo {
 
-GdOptions gd_options(const io::RunConfig::Agents& a) {
+GdOptions gd_options(const config::RunConfig::Agents& a) {
   return {a.epochs,         a.episode_steps, gd_rule_from(a.gd_rule), a.gd_step,        a.adam_lr,
           a.rest_moves,     a.rest_move_max, a.rest_length_min,        a.rest_length_max};
 }

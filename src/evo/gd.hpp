@@ -22,7 +22,7 @@ GdRule gd_rule_from(const std::string& name);  // "paper", "keep_best", "adam"; 
 const char* gd_rule_name(GdRule r);
 
 // the [agents] keys gradient descent reads, taken from the section by gd_options (the config's schema holds their
-// defaults: gd_options(io::default_config().agents)); a test or a command may then change them
+// defaults: gd_options(config::default_config().agents)); a test or a command may then change them
 struct GdOptions {
   int epochs{};                    // gradient evaluations and updates
   int steps{};                     // steps per episode on flat ground
@@ -34,7 +34,7 @@ struct GdOptions {
   double rest_length_min{};        // × morph::kSpacing (0.05 u)
   double rest_length_max{};        // × morph::kSpacing
 };
-GdOptions gd_options(const io::RunConfig::Agents& a);
+GdOptions gd_options(const config::RunConfig::Agents& a);
 
 struct TrainResult {
   double travel_u = 0;             // travel of the kept parameters, u

@@ -613,7 +613,7 @@ std::string markdown() {
 void derive(const h5::Node& root, const std::string& from, const std::string& config_toml,
             const std::string& start_time, const std::string& derived_from) {
   bool later = false;
-  for (const std::string& s : stage_names()) {
+  for (const std::string& s : config::stage_names()) {
     later = later || s == from;
     if (later) root.remove(s);
   }

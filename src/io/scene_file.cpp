@@ -114,9 +114,9 @@ sim::Scene read_scene(const std::string& path) {
   // environment
   const h5::Node env = f.group("env");
   s.env.name = env.read_string("name");
-  if (!is_known_environment(s.env.name)) {
+  if (!config::is_known_environment(s.env.name)) {
     std::string known;
-    for (const std::string& n : environment_names()) known += (known.empty() ? "" : ", ") + n;
+    for (const std::string& n : config::environment_names()) known += (known.empty() ? "" : ", ") + n;
     throw InputError(msg() << path << ": attribute 'name' of env is \"" << s.env.name
                            << "\", not a known environment (known: " << known << ")");
   }
@@ -192,7 +192,7 @@ void write_scene_to(h5::File& f, const sim::Scene& s) {
 
 void write_scene(const std::string& path, const sim::Scene& s, bool overwrite) {
   sim::validate(s);
-  DIVCOLL_THROW_UNLESS(is_known_environment(s.env.name),
+  DIVCOLL_THROW_UNLESS(config::is_known_environment(s.env.name),
                        "cannot write " << path << ": the scene's environment \"" << s.env.name
                                        << "\" is not a known environment");
   h5::File f = h5::File::create(path, overwrite);

@@ -50,7 +50,7 @@ struct RunOptions {
                                  // the spec's double precision (SPEC §10); false = the spec's step (run.precision)
 };
 
-// a run's two choices of how every episode is computed (run.contact, run.precision; io::run_physics reads them
+// a run's two choices of how every episode is computed (run.contact, run.precision; config::run_physics reads them
 // from a config). Nothing holds them for the process: whatever builds a run's scenes and episodes is given them
 // and passes them on, the contact law into every environment it places (Environment::contact, so the scene
 // carries it), the precision into every episode's options (RunOptions::float_networks)

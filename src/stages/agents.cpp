@@ -186,7 +186,7 @@ class AgentsPlan final : public Plan {
 
  private:
   const AgentsDef def_;
-  const io::RunConfig::Agents& A_;
+  const config::RunConfig::Agents& A_;
   const AgentsSpec spec_;
   const int P_;
   evo::GdOptions gd_;
@@ -207,7 +207,7 @@ std::string gen_name(const std::string& group, int g) {
   return group + b;
 }
 
-AgentsDef agents_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.agents, io::run_physics(cfg)}; }
+AgentsDef agents_def(const config::RunConfig& cfg) { return {cfg.run.seed, cfg.agents, config::run_physics(cfg)}; }
 
 std::unique_ptr<Plan> make_agents_plan(const AgentsDef& def, const AgentsSpec& spec,
                                        std::vector<evo::Individual> population) {

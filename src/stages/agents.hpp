@@ -29,7 +29,7 @@
 namespace divcoll::stages {
 
 // random-number stage id of generation g of the agents stage (SPEC §10: seeds are (run, stage, item))
-inline constexpr uint64_t kAgentsStage = io::stage_stream("agents");
+inline constexpr uint64_t kAgentsStage = config::stage_stream("agents");
 
 // where and how a population is evolved: the main one (defaults) or a graded-diversity one (SPEC §7.5)
 struct AgentsSpec {
@@ -43,10 +43,10 @@ struct AgentsSpec {
 // the config values the agents plan reads: the run's seed, the [agents] section and the run's physics
 struct AgentsDef {
   uint64_t seed = 0;
-  io::RunConfig::Agents agents;
+  config::RunConfig::Agents agents;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-AgentsDef agents_def(const io::RunConfig& cfg);
+AgentsDef agents_def(const config::RunConfig& cfg);
 
 // the stage as a plan: one round per generation (0 .. agents.generations), one item per agent trained (created
 // or mutated on the master); the master's selection is the round's reduction, and finish() records the final

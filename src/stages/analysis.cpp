@@ -327,7 +327,7 @@ class AdversityPlan final : public Plan {
 
   const AnalysisDef def_;
   const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
-  const io::RunConfig::Analysis& A_ = def_.analysis;
+  const config::RunConfig::Analysis& A_ = def_.analysis;
   const std::vector<std::string>& envs_ = def_.deploy.environments;
   const std::vector<morph::Agent>& agents_;
   const std::array<std::vector<std::vector<double>>, 2> weights_;  // [type][replicate]
@@ -504,7 +504,7 @@ class FamiliarityPlan final : public Plan {
 
  private:
   const AnalysisDef def_;
-  const io::RunConfig::Analysis& A_ = def_.analysis;
+  const config::RunConfig::Analysis& A_ = def_.analysis;
   const std::vector<std::string>& envs_ = def_.deploy.environments;
   const std::vector<std::string> novel_;
   const int K_;                                     // hidden states per episode
@@ -517,8 +517,8 @@ class FamiliarityPlan final : public Plan {
 
 }  // namespace
 
-AnalysisDef analysis_def(const io::RunConfig& cfg) {
-  return {cfg.run.seed, cfg.analysis, cfg.deploy, cfg.connectors, io::run_physics(cfg)};
+AnalysisDef analysis_def(const config::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.analysis, cfg.deploy, cfg.connectors, config::run_physics(cfg)};
 }
 
 std::unique_ptr<Plan> make_adversity_plan(const AnalysisDef& def, const std::vector<morph::Agent>& agents,

@@ -57,7 +57,7 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kAnalysisStage = io::stage_stream("analysis");
+inline constexpr uint64_t kAnalysisStage = config::stage_stream("analysis");
 
 // the two types the analyses compare: weak connectors deployed as trained
 inline const std::array<std::string, 2> kAnalysisTypes = {"weak_uniform@uniform", "weak_diverse@diverse"};
@@ -74,12 +74,12 @@ struct Deployed {
 // [connectors] the replicates, batch_pairs and the weak connector's springs, and the run's physics
 struct AnalysisDef {
   uint64_t seed = 0;
-  io::RunConfig::Analysis analysis;
-  io::RunConfig::Deploy deploy;
-  io::RunConfig::Connectors connectors;
+  config::RunConfig::Analysis analysis;
+  config::RunConfig::Deploy deploy;
+  config::RunConfig::Connectors connectors;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-AnalysisDef analysis_def(const io::RunConfig& cfg);
+AnalysisDef analysis_def(const config::RunConfig& cfg);
 
 // the adversity analysis (§8.1) as a plan. Per type of kAnalysisTypes: its weights (one per replicate), its pairs
 // and its index among deploy's `deploy_types` types; `novel`: the novel environments. It keeps a reference to

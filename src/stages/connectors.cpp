@@ -1,7 +1,7 @@
 // connector training as a plan (stages/plan.hpp): every slot (a connector being trained) in lock-step, one round
 // per iteration, one item per pair episode. Two plans: the plain one (Adam or a normalized step on the
 // summed gradient) and, when any of the optimisation keys differs from its default, the extended
-// one (collective::ConnectorOptimizer: decaying rate, keep-best on a validation batch, truncated
+// one (evo::ConnectorOptimizer: decaying rate, keep-best on a validation batch, truncated
 // backpropagation, gradient averaging, CMA-ES). They share the slots, batches, curves and weights rows.
 //
 // Rows (through the run-file schema; <group> = each slot's group, columns its slots):
@@ -55,7 +55,7 @@ template <class Ar>
 void serialize(Ar& ar, PairDone& d, unsigned) {
   ar & d.travel_u & d.travel_bl & d.status & d.grad & d.redone_in_double;
 }
-// a finished pair as collective::ProbeSum takes it (by value: a caller done with `d` moves its gradient in)
+// a finished pair as evo::ProbeSum takes it (by value: a caller done with `d` moves its gradient in)
 collective::PairOutcome outcome(PairDone d) {
   collective::PairOutcome o;
   o.travel_u = d.travel_u, o.travel_bl = d.travel_bl, o.status = static_cast<sim::Status>(d.status);
@@ -90,7 +90,7 @@ class LockstepPlan : public ConnectorsPlan {
     return collective::random_pairs(rng, population_, batch_pairs_);
   }
   std::vector<double> initial_weights(int c) const {
-    Rng rng = make_rng(def_.seed, slots_[c].stream, io::kItemInitialWeights);
+    Rng rng = make_rng(def_.seed, slots_[c].stream, config::kItemInitialWeights);
     return collective::initial_connector_params(def_.connectors, slots_[c].tether.amplitude, rng);
   }
   // one pair episode of weight vector t.weights of the round's weights_
@@ -199,8 +199,8 @@ class PlainConnectorsPlan final : public LockstepPlan {
     for (int c = 0; c < slot_count_; ++c)
       for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
     curve_u_.assign(slot_count_, kNaN), curve_bl_.assign(slot_count_, kNaN), nan_pairs_.assign(slot_count_, 0);
-    collective::ProbeSum empty;
-    empty.pair_clip = collective::pair_clip(collective::opt_settings(def_.connectors));  // connectors.clip
+    evo::ProbeSum empty;
+    empty.pair_clip = evo::pair_clip(evo::opt_settings(def_.connectors));  // connectors.clip
     sums_.assign(slot_count_, empty);
     return items;
   }
@@ -218,7 +218,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
   Records end_round(int it) override {
     const auto& C = def_.connectors;
     for (int c = 0; c < slot_count_; ++c) {
-      collective::ProbeResult r = sums_[c].mean();
+      evo::ProbeResult r = sums_[c].mean();
       nan_pairs_[c] = r.not_ok;
       report_bad_gradients(it, c, r.bad_grad, r.redone);
       if (r.ok == 0) continue;
@@ -254,7 +254,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
   std::vector<std::vector<double>> params_;
   std::vector<evo::Adam> adam_;
   std::vector<double> curve_u_, curve_bl_, nan_pairs_;
-  std::vector<collective::ProbeSum> sums_;  // each slot's batch, summed in pair order
+  std::vector<evo::ProbeSum> sums_;  // each slot's batch, summed in pair order
 };
 
 // the connector optimisation keys: ask/tell optimizers, each probe a weight vector on a batch; with
@@ -264,7 +264,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
  public:
   ExtendedConnectorsPlan(const ConnectorsDef& def, const std::vector<morph::Agent>& agents,
                          const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
-      : LockstepPlan(def, agents, slots, spec), os_(collective::opt_settings(def.connectors)),
+      : LockstepPlan(def, agents, slots, spec), os_(evo::opt_settings(def.connectors)),
         es_(os_.optimizer == "cmaes"), E_(static_cast<size_t>(spec.iterations) * os_.es_popsize) {}
 
   bool closing_round() const override { return os_.keep_best; }
@@ -278,7 +278,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
     for (int c = 0; c < slot_count_; ++c) opt_.emplace_back(os_, initial_weights(c), iterations_, def_.seed, slots_[c].stream);
     if (os_.keep_best)
       for (int c = 0; c < slot_count_; ++c)
-        val_.push_back(collective::validation_pairs(slots_[c].diverse, def_.connectors.validation_pairs, batch_pairs_, population_,
+        val_.push_back(evo::validation_pairs(slots_[c].diverse, def_.connectors.validation_pairs, batch_pairs_, population_,
                                                     def_.seed, slots_[c].stream));
     if (done == 0) return;
     auto row = [&](const std::string& name, int c, size_t w) {
@@ -286,7 +286,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
       return std::vector<double>(x.begin() + c * w, x.begin() + (c + 1) * w);
     };
     for (int c = 0; c < slot_count_; ++c) {
-      collective::ConnectorOptimizer::State st;
+      evo::ConnectorOptimizer::State st;
       st.params = row("params", c, params_per_connector_), st.m = row("adam_m", c, params_per_connector_), st.v = row("adam_v", c, params_per_connector_);
       st.best_params = row("best_params", c, params_per_connector_);
       const std::vector<double> b = row("best", c, 2);
@@ -320,7 +320,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
     for (int c = 0; c < slot_count_; ++c) {
       if (!closing) {
         const auto pairs = batch(c, it);
-        for (const collective::Probe& p : opt_[c].ask(it)) {
+        for (const evo::Probe& p : opt_[c].ask(it)) {
           w.insert(w.end(), p.weights.begin(), p.weights.end());
           for (const auto& [a, b] : pairs) items_.push_back(pack(PairTask{nw, c, a, b, p.grad}));
           counts_[c].push_back(static_cast<int>(pairs.size()));
@@ -350,14 +350,14 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   void reduce(int, int64_t i, const std::string& bytes) override { done_[i] = unpack<PairDone>(bytes); }
   Records end_round(int it) override {
     // per slot: the probes' mean results and the validation score
-    std::vector<std::vector<collective::ProbeResult>> results(slot_count_);
+    std::vector<std::vector<evo::ProbeResult>> results(slot_count_);
     vscore_.assign(slot_count_, kNaN);
     size_t q = 0;
     for (int c = 0; c < slot_count_; ++c) {
       int bad_grad = 0, redone = 0;
       for (size_t w = 0; w < counts_[c].size(); ++w) {
-        collective::ProbeSum sum;
-        sum.pair_clip = collective::pair_clip(os_);  // connectors.clip
+        evo::ProbeSum sum;
+        sum.pair_clip = evo::pair_clip(os_);  // connectors.clip
         for (int p = 0; p < counts_[c][w]; ++p, ++q) sum.add(outcome(done_[q]));
         bad_grad += sum.bad_grad, redone += sum.redone;
         if (os_.keep_best && w + 1 == counts_[c].size()) vscore_[c] = sum.mean().travel_bl;
@@ -407,10 +407,10 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   }
 
  private:
-  const collective::OptSettings os_;
+  const evo::OptSettings os_;
   const bool es_;
   const size_t E_;
-  std::vector<collective::ConnectorOptimizer> opt_;
+  std::vector<evo::ConnectorOptimizer> opt_;
   std::vector<std::vector<std::pair<int, int>>> val_;
   std::vector<std::string> items_;
   std::vector<std::vector<int>> counts_;
@@ -430,12 +430,12 @@ SlotGroups slot_groups(const std::vector<ConnectorSlot>& slots) {
   return g;
 }
 
-ConnectorsDef connectors_def(const io::RunConfig& cfg) { return {cfg.run.seed, cfg.connectors, io::run_physics(cfg)}; }
+ConnectorsDef connectors_def(const config::RunConfig& cfg) { return {cfg.run.seed, cfg.connectors, config::run_physics(cfg)}; }
 
 std::unique_ptr<ConnectorsPlan> make_connectors_plan(const ConnectorsDef& def,
                                                      const std::vector<morph::Agent>& agents,
                                                      const std::vector<ConnectorSlot>& slots, const TrainSpec& spec) {
-  if (collective::extended(collective::opt_settings(def.connectors)))
+  if (evo::extended(evo::opt_settings(def.connectors)))
     return std::make_unique<ExtendedConnectorsPlan>(def, agents, slots, spec);
   return std::make_unique<PlainConnectorsPlan>(def, agents, slots, spec);
 }
@@ -464,7 +464,7 @@ void run_connectors_stage(Driver& driver) {
   std::vector<ConnectorSlot> slots;
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < R; ++r)
-      slots.push_back({collective::tether(C, kinds[k]), io::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
+      slots.push_back({collective::tether(C, kinds[k]), config::connector_kind(kinds[k]).diverse, "flat", kConnectorsStage + k * R + r,
                        "connectors/" + kinds[k], r});
   TrainSpec spec{"connectors", "connectors", C.iterations, C.batch_pairs, C.episode_steps};
   train_connectors(driver, agents, slots, spec);

@@ -27,7 +27,7 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kConnectorsStage = io::stage_stream("connectors");
+inline constexpr uint64_t kConnectorsStage = config::stage_stream("connectors");
 
 // one connector being trained: its springs, its batches (uniform: agent i with its clone;
 // diverse: fresh random pairs each iteration from its stream), its training environment, and where its
@@ -49,10 +49,10 @@ struct TrainSpec {
 // the config values connector training reads: the run's seed, the [connectors] section and the run's physics
 struct ConnectorsDef {
   uint64_t seed = 0;
-  io::RunConfig::Connectors connectors;
+  config::RunConfig::Connectors connectors;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-ConnectorsDef connectors_def(const io::RunConfig& cfg);
+ConnectorsDef connectors_def(const config::RunConfig& cfg);
 
 // connector training as a plan: every slot in lock-step, one round per iteration, one item per pair episode.
 // The plain plan (Adam or a normalized step on the summed gradient) or, when any of the optimisation keys

@@ -241,7 +241,7 @@ class DeployPlan final : public Plan {
  private:
   const DeployDef def_;
   const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
-  const io::RunConfig::Deploy& D_ = def_.deploy;
+  const config::RunConfig::Deploy& D_ = def_.deploy;
   const std::vector<morph::Agent>& agents_;
   const std::vector<std::string> types_;
   const std::vector<std::vector<std::vector<double>>> weights_;  // [type][replicate] → params
@@ -267,8 +267,8 @@ class DeployPlan final : public Plan {
 
 }  // namespace
 
-DeployDef deploy_def(const io::RunConfig& cfg) {
-  return {cfg.run.seed, cfg.deploy, cfg.connectors, cfg.analysis, io::run_physics(cfg)};
+DeployDef deploy_def(const config::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.deploy, cfg.connectors, cfg.analysis, config::run_physics(cfg)};
 }
 
 std::unique_ptr<Plan> make_deploy_plan(const DeployDef& def, const std::vector<morph::Agent>& agents,

@@ -31,7 +31,7 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kDeployStage = io::stage_stream("deploy");
+inline constexpr uint64_t kDeployStage = config::stage_stream("deploy");
 
 // the collective types deployed: every trained kind on uniform and on diverse pairs
 struct DeployTypes {
@@ -46,12 +46,12 @@ struct DeployTypes {
 // beside their hidden states) and the run's physics
 struct DeployDef {
   uint64_t seed = 0;
-  io::RunConfig::Deploy deploy;
-  io::RunConfig::Connectors connectors;
-  io::RunConfig::Analysis analysis;
+  config::RunConfig::Deploy deploy;
+  config::RunConfig::Connectors connectors;
+  config::RunConfig::Analysis analysis;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-DeployDef deploy_def(const io::RunConfig& cfg);
+DeployDef deploy_def(const config::RunConfig& cfg);
 
 // the deployment as a plan: one round per environment, one item per episode (every agent alone, then every
 // collective type × replicate × pair); the rows of round e are row e of every dataset. It keeps a reference to

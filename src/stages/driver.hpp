@@ -23,7 +23,7 @@ namespace divcoll::stages {
 class Driver {
  public:
   virtual ~Driver() = default;
-  virtual const io::RunConfig& config() const = 0;
+  virtual const config::RunConfig& config() const = 0;
   virtual io::h5::File& file() const = 0;
   // whether this process holds the master's plan (the one whose start(), reduce() and records count)
   virtual bool master() const = 0;

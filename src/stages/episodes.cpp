@@ -7,7 +7,7 @@
 
 namespace divcoll::stages {
 
-std::vector<std::string> novel_environments(const io::RunConfig::Deploy& deploy) {
+std::vector<std::string> novel_environments(const config::RunConfig::Deploy& deploy) {
   std::vector<std::string> out;
   for (const auto& e : deploy.environments)
     if (e != "flat") out.push_back(e);

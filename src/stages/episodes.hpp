@@ -31,7 +31,7 @@ void serialize(Ar& ar, GroupEpisode& e, unsigned) {
 }
 
 // the novel environments of deploy.environments (every one but flat), in order
-std::vector<std::string> novel_environments(const io::RunConfig::Deploy& deploy);
+std::vector<std::string> novel_environments(const config::RunConfig::Deploy& deploy);
 
 // n distinct agents out of `population` (partial Fisher–Yates)
 std::vector<int32_t> distinct_agents(Rng& rng, int population, int n);

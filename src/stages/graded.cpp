@@ -28,8 +28,8 @@ GradedShape graded_shape(const std::vector<evo::Individual>& main) {
   return g;
 }
 
-GradedDef graded_def(const io::RunConfig& cfg) {
-  return {cfg.run.seed, cfg.graded, cfg.agents, cfg.connectors, cfg.deploy, io::run_physics(cfg)};
+GradedDef graded_def(const config::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.graded, cfg.agents, cfg.connectors, cfg.deploy, config::run_physics(cfg)};
 }
 
 std::pair<AgentsDef, AgentsSpec> graded_agents(const GradedDef& gdef, int v, GradedShape shape) {

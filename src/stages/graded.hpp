@@ -28,7 +28,7 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kGradedStage = io::stage_stream("graded");
+inline constexpr uint64_t kGradedStage = config::stage_stream("graded");
 
 // the graded populations, in order
 inline constexpr const char* kGradedPopulations[2] = {"same_shape", "same_shape_springs"};
@@ -45,13 +45,13 @@ GradedShape graded_shape(const std::vector<evo::Individual>& main);
 // run's physics
 struct GradedDef {
   uint64_t seed = 0;
-  io::RunConfig::Graded graded;
-  io::RunConfig::Agents agents;
-  io::RunConfig::Connectors connectors;
-  io::RunConfig::Deploy deploy;
+  config::RunConfig::Graded graded;
+  config::RunConfig::Agents agents;
+  config::RunConfig::Connectors connectors;
+  config::RunConfig::Deploy deploy;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-GradedDef graded_def(const io::RunConfig& cfg);
+GradedDef graded_def(const config::RunConfig& cfg);
 
 // population v's evolution: its config values (graded.population agents, one body, rest positions fixed; for
 // v = 1 one spring genotype and no evolution) and where it goes

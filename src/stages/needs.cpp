@@ -20,7 +20,7 @@ namespace {
 
 // stored values that the stages to run read, where no NaN or Inf may be (a finished stage's weights and bodies; a
 // running stage's checkpointed optimizer state)
-void check_finite(const io::RunConfig& cfg, const std::set<std::string>& present, const std::string& source,
+void check_finite(const config::RunConfig& cfg, const std::set<std::string>& present, const std::string& source,
                   bool continued) {
   io::h5::File f = io::h5::File::open(source);
   std::vector<std::string> finite;
@@ -28,7 +28,7 @@ void check_finite(const io::RunConfig& cfg, const std::set<std::string>& present
     for (const char* d : {"params", "rest_pos", "rest_length", "amplitude"}) finite.push_back(std::string("agents/final/") + d);
   if (present.count("connectors"))
     for (const std::string& kind : cfg.connectors.kinds) finite.push_back("connectors/" + kind + "/params");
-  if (continued && io::stage_enabled(cfg, "connectors") && !present.count("connectors"))
+  if (continued && config::stage_enabled(cfg, "connectors") && !present.count("connectors"))
     for (const char* d : {"params", "adam_m", "adam_v"}) finite.push_back(std::string("connectors/state/") + d);
   for (const std::string& d : finite) {
     if (!f.has(d)) continue;
@@ -45,12 +45,12 @@ void check_finite(const io::RunConfig& cfg, const std::set<std::string>& present
 
 }  // namespace
 
-void check_inputs(const io::RunConfig& cfg, bool agents_only, const std::string& existing, const std::string& from,
+void check_inputs(const config::RunConfig& cfg, bool agents_only, const std::string& existing, const std::string& from,
                   const std::string& base) {
   std::set<std::string> present;
   auto note_complete = [&](const std::string& file, const std::string& before) {
     io::h5::File f = io::h5::File::open(file);
-    for (const std::string& s : io::stage_names()) {
+    for (const std::string& s : config::stage_names()) {
       if (s == before) break;
       if (complete(f, s)) present.insert(s);
     }
@@ -60,12 +60,12 @@ void check_inputs(const io::RunConfig& cfg, bool agents_only, const std::string&
   const std::string source = !existing.empty() ? existing : base;
   if (!source.empty()) check_finite(cfg, present, source, !existing.empty());
   const std::string where = !existing.empty() ? existing : !from.empty() ? base : std::string();
-  for (const io::StageInfo& s : io::kStageTable) {
+  for (const config::StageInfo& s : config::kStageTable) {
     const std::string stage(s.name);
-    const bool runs = agents_only ? stage == "agents" : io::stage_enabled(cfg, stage);
+    const bool runs = agents_only ? stage == "agents" : config::stage_enabled(cfg, stage);
     if (!runs || present.count(stage)) continue;
     for (const std::string& need : io::split(std::string(s.reads))) {
-      if (present.count(need) || (!agents_only && io::stage_enabled(cfg, need))) continue;
+      if (present.count(need) || (!agents_only && config::stage_enabled(cfg, need))) continue;
       throw InputError(msg() << "stage " << stage << " reads the results of stage " << need << ", but " << need
                              << " is neither in run.stages nor complete in "
                              << (where.empty() ? "a new run file" : where)
@@ -75,10 +75,10 @@ void check_inputs(const io::RunConfig& cfg, bool agents_only, const std::string&
   }
 }
 
-Tape largest_tape(const io::RunConfig& cfg, bool agents_only) {
+Tape largest_tape(const config::RunConfig& cfg, bool agents_only) {
   Rng rng = make_rng(cfg.run.seed, 0, 0);
   morph::Agent a = collective::random_agent(rng), b = collective::random_agent(rng);
-  const sim::RunPhysics physics = io::run_physics(cfg);
+  const sim::RunPhysics physics = config::run_physics(cfg);
   sim::RunOptions opt = physics.options();
   opt.grad = true;
   Tape tape;
@@ -89,18 +89,18 @@ Tape largest_tape(const io::RunConfig& cfg, bool agents_only) {
       tape.bytes = n, tape.what = key + " = " + std::to_string(steps) + ", " + std::to_string(sim::substeps_needed(s)) +
                                   " substep(s) per step";
   };
-  if (agents_only || io::stage_enabled(cfg, "agents") || io::stage_enabled(cfg, "graded"))
+  if (agents_only || config::stage_enabled(cfg, "agents") || config::stage_enabled(cfg, "graded"))
     consider(collective::agent_scene(a, "flat", physics.contact), cfg.agents.episode_steps, "agents.episode_steps");
-  if (!agents_only && (io::stage_enabled(cfg, "connectors") || io::stage_enabled(cfg, "specialists") ||
-                       io::stage_enabled(cfg, "graded"))) {
+  if (!agents_only && (config::stage_enabled(cfg, "connectors") || config::stage_enabled(cfg, "specialists") ||
+                       config::stage_enabled(cfg, "graded"))) {
     a.anchors = collective::compute_anchors(a, physics);
     b.anchors = collective::compute_anchors(b, physics);
     const std::vector<double> w = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);
     double k = cfg.connectors.weak_stiffness;
     for (const std::string& kind : cfg.connectors.kinds)
-      if (io::stage_enabled(cfg, "connectors")) k = std::max(k, io::stiffness(cfg.connectors, kind));
+      if (config::stage_enabled(cfg, "connectors")) k = std::max(k, config::stiffness(cfg.connectors, kind));
     std::vector<std::string> envs = {"flat"};
-    if (io::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
+    if (config::stage_enabled(cfg, "specialists")) envs = cfg.deploy.environments;
     for (const std::string& env : envs)
       consider(collective::pair_scene(a, b, w, {k, cfg.connectors.amplitude}, env, physics.contact),
                cfg.connectors.episode_steps, "connectors.episode_steps");

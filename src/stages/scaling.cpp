@@ -103,7 +103,7 @@ class ScalingPlan final : public Plan {
 
  private:
   const ScalingDef def_;
-  const io::RunConfig::Scaling& S_ = def_.scaling;
+  const config::RunConfig::Scaling& S_ = def_.scaling;
   const std::vector<std::string>& envs_ = def_.deploy.environments;
   const sim::RunPhysics& physics_ = def_.physics;  // run.contact, run.precision
   const std::vector<morph::Agent>& agents_;
@@ -118,8 +118,8 @@ class ScalingPlan final : public Plan {
 
 }  // namespace
 
-ScalingDef scaling_def(const io::RunConfig& cfg) {
-  return {cfg.run.seed, cfg.scaling, cfg.deploy, cfg.connectors, io::run_physics(cfg)};
+ScalingDef scaling_def(const config::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.scaling, cfg.deploy, cfg.connectors, config::run_physics(cfg)};
 }
 
 std::unique_ptr<Plan> make_scaling_plan(const ScalingDef& def, const std::vector<morph::Agent>& agents,

@@ -19,18 +19,18 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kScalingStage = io::stage_stream("scaling");
+inline constexpr uint64_t kScalingStage = config::stage_stream("scaling");
 
 // the config values the scaling chains read: the run's seed, the [scaling] section, deploy.environments, from
 // [connectors] the replicates and the weak connector's springs, and the run's physics
 struct ScalingDef {
   uint64_t seed = 0;
-  io::RunConfig::Scaling scaling;
-  io::RunConfig::Deploy deploy;
-  io::RunConfig::Connectors connectors;
+  config::RunConfig::Scaling scaling;
+  config::RunConfig::Deploy deploy;
+  config::RunConfig::Connectors connectors;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-ScalingDef scaling_def(const io::RunConfig& cfg);
+ScalingDef scaling_def(const config::RunConfig& cfg);
 
 // the chains as a plan: one round per environment, one item per chain (size × variant × replicate × draw).
 // `weights`: the weak uniform-trained replicates, then the weak diverse-trained ones. It keeps a reference to

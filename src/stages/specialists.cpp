@@ -15,8 +15,8 @@
 
 namespace divcoll::stages {
 
-SpecialistsDef specialists_def(const io::RunConfig& cfg) {
-  return {cfg.run.seed, cfg.specialists, cfg.connectors, cfg.deploy, io::run_physics(cfg)};
+SpecialistsDef specialists_def(const config::RunConfig& cfg) {
+  return {cfg.run.seed, cfg.specialists, cfg.connectors, cfg.deploy, config::run_physics(cfg)};
 }
 
 void run_specialists_stage(Driver& driver) {

@@ -18,18 +18,18 @@
 
 namespace divcoll::stages {
 
-inline constexpr uint64_t kSpecialistsStage = io::stage_stream("specialists");
+inline constexpr uint64_t kSpecialistsStage = config::stage_stream("specialists");
 
 // the config values the specialists read: the run's seed, the [specialists] section, the [connectors] section
 // (their training and springs), the [deploy] section (the novel environments, the deployment's diverse pairs and
 // episode length) and the run's physics
 struct SpecialistsDef {
   uint64_t seed = 0;
-  io::RunConfig::Specialists specialists;
-  io::RunConfig::Connectors connectors;
-  io::RunConfig::Deploy deploy;
+  config::RunConfig::Specialists specialists;
+  config::RunConfig::Connectors connectors;
+  config::RunConfig::Deploy deploy;
   sim::RunPhysics physics;  // run.contact, run.precision
 };
-SpecialistsDef specialists_def(const io::RunConfig& cfg);
+SpecialistsDef specialists_def(const config::RunConfig& cfg);
 
 }  // namespace divcoll::stages

@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 
 // a complete run file's stored config and the commit it was made with
 struct Stored {
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   std::string commit;
 };
 
@@ -26,7 +26,7 @@ Stored stored_run(const std::string& run_file) {
   DIVCOLL_THROW_UNLESS(f.has_attribute("format") && f.read_string("format") == "divcoll-run" &&
                            f.has_attribute("config"),
                        run_file << " is not a divcoll run file (no format and config attributes)");
-  out.cfg = io::parse_config(f.read_string("config"), run_file + " (stored config)");
+  out.cfg = config::parse_config(f.read_string("config"), run_file + " (stored config)");
   DIVCOLL_THROW_UNLESS(f.has_attribute("end_time"),
                        run_file << " is not complete (no end_time): finish it first (divcoll run --resume)");
   if (f.has_attribute("git_commit")) out.commit = f.read_string("git_commit");
@@ -36,7 +36,7 @@ Stored stored_run(const std::string& run_file) {
 // which run of the study the file stands for: --variant, else its folder's name, else the run of its seed whose
 // config it has; `diff` gets the first key where the file differs from it (empty: none)
 int target_run(const Prepared& p, const std::string& run_file, const std::string& variant_given,
-               const io::RunConfig& cfg, std::string& diff) {
+               const config::RunConfig& cfg, std::string& diff) {
   std::vector<int> same_seed;
   for (size_t i = 0; i < p.runs.size(); ++i)
     if (p.runs[i].seed == cfg.run.seed) same_seed.push_back(static_cast<int>(i));

@@ -9,7 +9,7 @@
 namespace divcoll::study {
 
 void StageTimes::add(const std::string& path, const std::vector<int>& stages) {
-  const auto& names = io::stage_names();
+  const auto& names = config::stage_names();
   try {
     io::h5::File f = io::h5::File::open(path);
     for (int k : stages)

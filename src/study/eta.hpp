@@ -10,7 +10,7 @@ namespace divcoll::study {
 
 class StageTimes {
  public:
-  // adds the wall_s of the stages `stages` (indices into io::stage_names()) of the run file `path` (a file that
+  // adds the wall_s of the stages `stages` (indices into config::stage_names()) of the run file `path` (a file that
   // cannot be read adds nothing: timings only feed the ETA)
   void add(const std::string& path, const std::vector<int>& stages);
   // the mean seconds of a stage, or -1 when no run of it has ended

@@ -15,8 +15,8 @@ namespace divcoll::study {
 namespace {
 
 namespace fs = std::filesystem;
-using io::TomlValue;
-using Kind = io::TomlValue::Kind;
+using config::TomlValue;
+using Kind = config::TomlValue::Kind;
 
 TomlValue seed_values(const std::vector<std::uint64_t>& seeds) {
   std::vector<TomlValue> a;
@@ -94,9 +94,9 @@ const std::set<std::string>& free_keys() {
 // a run the manifest lists that the folder holds must keep its config in the study file
 void check_held_run(const std::string& study_file, const std::string& dir, const Prepared& p, const ManifestRun& o,
                     int j) {
-  io::RunConfig before;
+  config::RunConfig before;
   try {
-    before = io::load_config(p.s.base, o.overrides);
+    before = config::load_config(p.s.base, o.overrides);
   } catch (const InputError& e) {
     throw InputError(msg() << "run " << o.path << " of " << dir << " no longer reads: " << e.what());
   }
@@ -139,8 +139,8 @@ Manifest read_manifest(const std::string& dir) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   TomlValue t;
   try {
-    t = io::parse_toml(text, man.string());
-  } catch (const io::TomlSyntaxError& e) {
+    t = config::parse_toml(text, man.string());
+  } catch (const config::TomlSyntaxError& e) {
     throw InputError(msg() << man.string() << " is damaged: " << e.reason);
   }
   Manifest m;
@@ -175,7 +175,7 @@ std::string manifest_text(const Study& s, const std::vector<PlannedRun>& runs, c
   t.set("variant", TomlValue::list(std::move(vars)));
   t.set("run", TomlValue::list(std::move(list)));
   t.set("study_file", TomlValue::of(s.text));
-  return io::toml_text(t);
+  return config::toml_text(t);
 }
 
 void save_manifest(const std::string& dir, const Study& s, const std::vector<PlannedRun>& runs,
@@ -211,8 +211,8 @@ bool run_file_complete(const fs::path& run) {
   }
 }
 
-std::string first_difference(const io::RunConfig& a, const io::RunConfig& b) {
-  const auto fa = io::flat(a), fb = io::flat(b);
+std::string first_difference(const config::RunConfig& a, const config::RunConfig& b) {
+  const auto fa = config::flat(a), fb = config::flat(b);
   for (size_t i = 0; i < fa.size() && i < fb.size(); ++i)
     if (fa[i].second != fb[i].second && !free_keys().count(fa[i].first))
       return fa[i].first + " (" + fa[i].second + " -> " + fb[i].second + ")";

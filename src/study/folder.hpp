@@ -60,7 +60,7 @@ std::filesystem::path summary_path(const std::filesystem::path& run);
 bool run_file_complete(const std::filesystem::path& run);
 // the first key whose value differs between two configs, as "key (a -> b)", leaving out the keys that say how a
 // run is run or reported, not what it computes (as divcoll run --resume does); empty when they agree
-std::string first_difference(const io::RunConfig& a, const io::RunConfig& b);
+std::string first_difference(const config::RunConfig& a, const config::RunConfig& b);
 
 // the study file planned against the study folder, read only
 struct Prepared {

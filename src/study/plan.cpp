@@ -7,12 +7,12 @@
 namespace divcoll::study {
 namespace {
 
-// the stages `cfg` runs, as indices into io::stage_names()
-std::vector<int> enabled(const io::RunConfig& cfg) {
+// the stages `cfg` runs, as indices into config::stage_names()
+std::vector<int> enabled(const config::RunConfig& cfg) {
   std::vector<int> out;
-  const auto& names = io::stage_names();
+  const auto& names = config::stage_names();
   for (int i = 0; i < static_cast<int>(names.size()); ++i)
-    if (io::stage_enabled(cfg, names[i])) out.push_back(i);
+    if (config::stage_enabled(cfg, names[i])) out.push_back(i);
   return out;
 }
 
@@ -21,13 +21,13 @@ bool has(const std::vector<int>& v, int x) { return std::find(v.begin(), v.end()
 // the leading stages run `r` can take from the earlier run `earlier` of its seed: every one it needs the other
 // computed, with the same keys
 int shared_stages(const PlannedRun& earlier, const PlannedRun& r) {
-  const auto& names = io::stage_names();
+  const auto& names = config::stage_names();
   const int S = static_cast<int>(names.size());
   const std::vector<int> mine = enabled(r.cfg), theirs = enabled(earlier.cfg);
   int k = 0;
   while (k < S) {
     if (has(mine, k) && !has(theirs, k)) break;
-    if (!io::incompatible_keys(earlier.cfg, r.cfg, k + 1 < S ? names[k + 1] : std::string()).empty()) break;
+    if (!config::incompatible_keys(earlier.cfg, r.cfg, k + 1 < S ? names[k + 1] : std::string()).empty()) break;
     ++k;
   }
   return k;
@@ -46,7 +46,7 @@ void choose_base(const std::vector<PlannedRun>& runs, PlannedRun& r) {
   const std::vector<int> mine = enabled(r.cfg);
   if (r.base_run >= 0 && !mine.empty()) {
     const int from = std::min(best_k, mine.back());
-    if (from >= 1) r.from = io::stage_names()[from];
+    if (from >= 1) r.from = config::stage_names()[from];
     else r.base_run = -1;
   } else {
     r.base_run = -1;
@@ -68,7 +68,7 @@ std::vector<PlannedRun> plan(const Study& s) {
       r.overrides.insert(r.overrides.end(), s.variants[v].set.begin(), s.variants[v].set.end());
       r.overrides.push_back("run.seed=" + std::to_string(seed));
       try {
-        r.cfg = io::load_config(s.base, r.overrides);
+        r.cfg = config::load_config(s.base, r.overrides);
       } catch (const InputError& e) {
         throw InputError(msg() << "variant " << s.variants[v].name << " (seed " << seed << "): " << e.what());
       }
@@ -79,9 +79,9 @@ std::vector<PlannedRun> plan(const Study& s) {
   return runs;
 }
 
-std::vector<int> computed(const io::RunConfig& cfg, const std::string& from) {
+std::vector<int> computed(const config::RunConfig& cfg, const std::string& from) {
   std::vector<int> out;
-  const auto& names = io::stage_names();
+  const auto& names = config::stage_names();
   const int f = from.empty() ? 0 : static_cast<int>(std::find(names.begin(), names.end(), from) - names.begin());
   for (int i : enabled(cfg))
     if (i >= f) out.push_back(i);
@@ -92,7 +92,7 @@ std::vector<int> computed(const PlannedRun& r) { return computed(r.cfg, r.from);
 
 std::string stages_text(const std::vector<int>& stages) {
   std::string t;
-  for (int k : stages) t += (t.empty() ? "" : ",") + io::stage_names()[k];
+  for (int k : stages) t += (t.empty() ? "" : ",") + config::stage_names()[k];
   return t;
 }
 

@@ -1,7 +1,7 @@
 // the runs of a study: one per (seed, variant) that runs at that seed, seed by seed, each seed's variants in file
 // order, each with its config built and validated, and the earlier run whose stages it reuses. The base of a run
 // is the earlier run of the same seed that shares the most leading stages (the earliest on a tie): their keys agree
-// for those stages (io::incompatible_keys, as divcoll run --from asks), so variants that differ only in deploy keys
+// for those stages (config::incompatible_keys, as divcoll run --from asks), so variants that differ only in deploy keys
 // do not retrain agents or connectors.
 #pragma once
 
@@ -19,7 +19,7 @@ struct PlannedRun {
   int variant = 0;
   std::uint64_t seed = 0;
   std::vector<std::string> overrides;  // scale, then the variant's, then run.seed
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   std::string path;                    // relative to the study folder: <variant>/seed<k>.h5
   int base_run = -1;                   // index of the run whose earlier stages it reuses (-1: none)
   std::string from;                    // the first stage it computes when it reuses
@@ -28,8 +28,8 @@ struct PlannedRun {
 // every run with its config (validated against s.base; InputError naming the variant and seed) and what it reuses
 std::vector<PlannedRun> plan(const Study& s);
 
-// the stages a run computes itself (indices into io::stage_names()), given the stage it starts from ("": all)
-std::vector<int> computed(const io::RunConfig& cfg, const std::string& from);
+// the stages a run computes itself (indices into config::stage_names()), given the stage it starts from ("": all)
+std::vector<int> computed(const config::RunConfig& cfg, const std::string& from);
 std::vector<int> computed(const PlannedRun& r);
 // "agents,connectors,deploy"
 std::string stages_text(const std::vector<int>& stages);

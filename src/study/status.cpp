@@ -51,7 +51,7 @@ std::vector<std::string> last_lines(const std::string& path, size_t n) {
 struct RunView {
   const ManifestRun* m = nullptr;
   fs::path file;
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   bool have_cfg = false;  // its config still reads
   bool done = false;      // its run file ended, or it is complete and kept as its summary
   std::map<std::string, std::string> job;
@@ -88,7 +88,7 @@ StatusReport::StatusReport(const std::string& dir) : dir_(dir), manifest_(read_m
     v.m = &manifest_.runs[i];
     v.file = fs::path(dir) / v.m->path;
     try {
-      v.cfg = io::load_config(base, v.m->overrides);
+      v.cfg = config::load_config(base, v.m->overrides);
       v.have_cfg = true;
     } catch (const std::exception&) {
     }
@@ -101,7 +101,7 @@ StatusReport::StatusReport(const std::string& dir) : dir_(dir), manifest_(read_m
 }
 
 std::vector<int> StatusReport::remaining(int i, std::string* at) const {
-  const auto& names = io::stage_names();
+  const auto& names = config::stage_names();
   const RunView& v = runs_[i];
   std::vector<int> out;
   std::set<std::string> complete_stages;

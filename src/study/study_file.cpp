@@ -14,8 +14,8 @@ namespace divcoll::study {
 namespace {
 
 namespace fs = std::filesystem;
-using io::TomlValue;
-using Kind = io::TomlValue::Kind;
+using config::TomlValue;
+using Kind = config::TomlValue::Kind;
 
 std::vector<std::string> strings(const TomlValue& n, const std::string& what) {
   DIVCOLL_THROW_UNLESS(n.is(Kind::array), what << " must be a list of strings");
@@ -104,7 +104,7 @@ Study parse_study(const std::string& path) { return parse_study_text(read_text(p
 Study parse_study_text(const std::string& text, const std::string& path) {
   Study s;
   s.text = text;
-  const TomlValue root = io::parse_toml(s.text, path);
+  const TomlValue root = config::parse_toml(s.text, path);
   for (const auto& [key, v] : root.keys)
     DIVCOLL_THROW_UNLESS(key == "study" || key == "variant",
                          "unknown table [" << key << "] in " << path << " (a study file has [study] and [[variant]])");

@@ -171,7 +171,7 @@ TEST_F(Cli, SceneTakesTheContactLawFromTheConfigAndSimulatesIt) {
     const sim::Scene s = io::read_scene(path("ns.h5")), cs = io::read_scene(path("cb.h5"));
     EXPECT_EQ(s.env.contact, sim::ContactLaw::no_slip) << env;
     EXPECT_EQ(cs.env.contact, sim::ContactLaw::coulomb) << env;
-    EXPECT_EQ(s.env.no_slip_keep, io::environment_table(env).physics.no_slip_keep);
+    EXPECT_EQ(s.env.no_slip_keep, config::environment_table(env).physics.no_slip_keep);
     const Exec r = run("simulate --scene " + path("ns.h5") + " --steps 200 --force --out " + path("nt.h5"));
     ASSERT_EQ(r.code, 0) << r.out;
     sim::RunOptions opt;

@@ -12,11 +12,11 @@ namespace divcoll {
 namespace {
 
 TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
-  const io::RunConfig d = io::default_config();
+  const config::RunConfig d = config::default_config();
   EXPECT_EQ(collective::tether(d.connectors, "weak_uniform").stiffness, d.connectors.weak_stiffness);
   EXPECT_EQ(collective::tether(d.connectors, "strong_diverse").stiffness, d.connectors.strong_stiffness);
   EXPECT_EQ(collective::tether(d.connectors, "weak_diverse").amplitude, d.connectors.amplitude);
-  const io::RunConfig c = io::apply_overrides(
+  const config::RunConfig c = config::apply_overrides(
       d, {"connectors.amplitude=0.3", "connectors.weak_stiffness=700", "connectors.strong_stiffness=9000"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
     EXPECT_EQ(collective::tether(c.connectors, kind).amplitude, 0.3) << kind;
@@ -26,12 +26,12 @@ TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
   EXPECT_EQ(collective::strength_tether(c.connectors, "strong").amplitude, 0.3);
   // connectors.damping: every kind's dashpot, 0 by default (SPEC §6.2)
   EXPECT_EQ(collective::tether(d.connectors, "weak_uniform").damping, 0.0);
-  const io::RunConfig damped = io::apply_overrides(d, {"connectors.damping=12.5"});
+  const config::RunConfig damped = config::apply_overrides(d, {"connectors.damping=12.5"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"})
     EXPECT_EQ(collective::tether(damped.connectors, kind).damping, 12.5) << kind;
   EXPECT_EQ(collective::strength_tether(damped.connectors, "weak").damping, 12.5);
   // connectors.follower: no stiffness for any kind, the rest kept
-  const io::RunConfig follow = io::apply_overrides(damped, {"connectors.follower=true"});
+  const config::RunConfig follow = config::apply_overrides(damped, {"connectors.follower=true"});
   for (const char* kind : {"weak_uniform", "weak_diverse", "strong_uniform", "strong_diverse"}) {
     EXPECT_EQ(collective::tether(follow.connectors, kind).stiffness, 0.0) << kind;
     EXPECT_EQ(collective::tether(follow.connectors, kind).damping, 12.5) << kind;
@@ -43,12 +43,12 @@ TEST(Tether, EachKindGetsItsStrengthsStiffnessAndTheConfigsAmplitude) {
 }
 
 TEST(DeployUniformPairs, HeldOutAgentsFollowTheTrainingBatchAndNeverMeetIt) {
-  const io::RunConfig c = io::apply_overrides(io::default_config(),
+  const config::RunConfig c = config::apply_overrides(config::default_config(),
                                               {"agents.population=120", "connectors.batch_pairs=5", "deploy.pairs=20"});
   const auto training = collective::deploy_uniform_pairs(c.deploy, c.connectors);
   ASSERT_EQ(training.size(), 20u);
   for (size_t q = 0; q < training.size(); ++q) EXPECT_EQ(training[q], std::make_pair(int(q), int(q)));
-  const io::RunConfig h = io::apply_overrides(c, {"deploy.uniform_agents=held_out"});
+  const config::RunConfig h = config::apply_overrides(c, {"deploy.uniform_agents=held_out"});
   const auto held = collective::deploy_uniform_pairs(h.deploy, h.connectors);
   ASSERT_EQ(held.size(), 20u);
   for (size_t q = 0; q < held.size(); ++q) {

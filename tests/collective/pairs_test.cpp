@@ -118,7 +118,7 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   const std::vector<morph::Agent> agents = {agent(1), agent(2)};
   Rng rng = make_rng(5, 10, 0);
   const std::vector<double> w = morph::init_connector_params(rng, 1.0);
-  const io::RunConfig cfg = io::apply_overrides(io::default_config(), {"connectors.follower=true"});
+  const config::RunConfig cfg = config::apply_overrides(config::default_config(), {"connectors.follower=true"});
   const collective::Tether follower = collective::tether(cfg.connectors, "weak_diverse");
   ASSERT_EQ(follower.stiffness, 0.0);
   ASSERT_EQ(follower.damping, 0.0);
@@ -161,7 +161,7 @@ TEST(PairFollower, WithoutDampingEachAgentMovesAsItDoesAlone) {
   for (double g : a.grad) EXPECT_EQ(g, 0.0);
   // a dashpot couples the two again
   const collective::Tether damped =
-      collective::tether(io::apply_overrides(cfg, {"connectors.damping=20"}).connectors, "weak_diverse");
+      collective::tether(config::apply_overrides(cfg, {"connectors.damping=20"}).connectors, "weak_diverse");
   EXPECT_NE(collective::run_pair(sim, agents[0], agents[1], w, damped, "flat", testing::kSpec, T, false).travel_u, a.travel_u);
 }
 

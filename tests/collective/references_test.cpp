@@ -74,7 +74,7 @@ double mean_elastic_stretch(const morph::Agent& a, const std::vector<double>& w,
 }
 
 TEST(FollowerPolicy, KeepsTheSpringForcesOfACloneClonePairSmall) {
-  const io::RunConfig cfg = io::default_config();
+  const config::RunConfig cfg = config::default_config();
   const collective::ReferenceConnector passive = collective::reference_connector(cfg.connectors, "passive");
   const collective::ReferenceConnector follower = collective::reference_connector(cfg.connectors, "follower");
   for (uint64_t seed : {1, 2, 3}) {
@@ -87,7 +87,7 @@ TEST(FollowerPolicy, KeepsTheSpringForcesOfACloneClonePairSmall) {
 }
 
 TEST(ReferenceConnectors, FreeHasNoSpringForcePassiveAndFollowerAreWeak) {
-  const io::RunConfig cfg = io::apply_overrides(io::default_config(), {"connectors.damping=2.0"});
+  const config::RunConfig cfg = config::apply_overrides(config::default_config(), {"connectors.damping=2.0"});
   const collective::Tether weak = collective::tether(cfg.connectors, "weak_uniform");
   const auto free = collective::reference_connector(cfg.connectors, "free");
   EXPECT_EQ(free.tether.stiffness, 0.0);
@@ -105,14 +105,14 @@ TEST(ReferenceConnectors, FreeHasNoSpringForcePassiveAndFollowerAreWeak) {
 }
 
 TEST(ConnectorInit, RandomIsTheSpecsInitAndFollowerIsThePolicyPlusNoise) {
-  io::RunConfig cfg = io::default_config();
+  config::RunConfig cfg = config::default_config();
   Rng a = make_rng(4, 2000, 1000000), b = make_rng(4, 2000, 1000000);
   EXPECT_EQ(collective::initial_connector_params(cfg.connectors, 0.6, a),
             morph::init_connector_params(b, cfg.connectors.init_out_gain));
-  cfg = io::apply_overrides(cfg, {"connectors.init=\"follower\"", "connectors.init_noise=0"});
+  cfg = config::apply_overrides(cfg, {"connectors.init=\"follower\"", "connectors.init_noise=0"});
   Rng c = make_rng(4, 2000, 1000000);
   EXPECT_EQ(collective::initial_connector_params(cfg.connectors, 0.6, c), collective::follower_connector_params(0.6));
-  cfg = io::apply_overrides(cfg, {"connectors.init_noise=0.01"});
+  cfg = config::apply_overrides(cfg, {"connectors.init_noise=0.01"});
   Rng d = make_rng(4, 2000, 1000000);
   const std::vector<double> w = collective::initial_connector_params(cfg.connectors, 0.6, d);
   const std::vector<double> f = collective::follower_connector_params(0.6);

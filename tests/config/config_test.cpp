@@ -16,7 +16,7 @@
 #include "config/environments.hpp"
 #include "testing.hpp"
 
-namespace divcoll::io {
+namespace divcoll::config {
 namespace {
 
 using ::testing::HasSubstr;
@@ -522,4 +522,4 @@ TEST(ConfigErrors, VariantKeysNeedTheirCounterparts) {
   EXPECT_EQ(parse_config("", "test", {"connectors.clip=per_pair"}).connectors.clip, "per_pair");
 }
 
-}  // namespace divcoll::io
+}  // namespace divcoll::config

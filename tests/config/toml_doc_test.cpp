@@ -7,7 +7,7 @@
 
 #include <string>
 
-namespace divcoll::io {
+namespace divcoll::config {
 namespace {
 
 using Kind = TomlValue::Kind;
@@ -71,4 +71,4 @@ TEST(TomlDoc, RefusesATextThatDoesNotParseWithItsOriginAndLine) {
 }
 
 }  // namespace
-}  // namespace divcoll::io
+}  // namespace divcoll::config

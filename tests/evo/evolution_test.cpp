@@ -29,7 +29,7 @@ morph::Agent moved_parent(uint64_t seed) {
   Rng rng = make_rng(seed, 8, 1);
   std::vector<double> d(2 * kM);
   for (double& x : d) x = normal(rng, 0.0, 0.003);
-  EXPECT_TRUE(evo::move_rest_positions(a, d, evo::gd_options(io::default_config().agents)));
+  EXPECT_TRUE(evo::move_rest_positions(a, d, evo::gd_options(config::default_config().agents)));
   return a;
 }
 
@@ -65,9 +65,9 @@ void expect_valid_child(const morph::Agent& c, const morph::Agent& parent, const
 // ---- make_offspring --------------------------------------------------------------------------------
 
 TEST(EvolutionOffspring, ChildIsValidAndMatchesItsGenotype) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
   for (double p : {-1.0, 0.2}) {  // -1: the defaults; 0.2: many flips, so that repair is exercised
-    evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+    evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
     if (p > 0) opt.body_flip_p = opt.spring_flip_p = p;
     int body_changed = 0, springs_changed = 0;
     for (int i = 0; i < 200; ++i) {
@@ -85,8 +85,8 @@ TEST(EvolutionOffspring, ChildIsValidAndMatchesItsGenotype) {
 }
 
 TEST(EvolutionOffspring, NewBodyStartsFromItsLatticeAndOldBodyKeepsItsPositions) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
-  evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
+  evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
   opt.body_flip_p = 0.1;
   opt.rest_jitter_sd = 0;
   int seen_new = 0, seen_old = 0;
@@ -107,8 +107,8 @@ TEST(EvolutionOffspring, NewBodyStartsFromItsLatticeAndOldBodyKeepsItsPositions)
 }
 
 TEST(EvolutionOffspring, SameSeedSameChild) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
-  evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
+  evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
   opt.body_flip_p = opt.spring_flip_p = 0.1;
   for (int i = 0; i < 20; ++i) {
     const morph::Agent parent = moved_parent(10 + i);
@@ -129,9 +129,9 @@ TEST(EvolutionOffspring, SameSeedSameChild) {
 }
 
 TEST(EvolutionOffspring, FixedGenotypesNeverChange) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
   for (int which = 0; which < 2; ++which) {
-    evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+    evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
     opt.body_flip_p = opt.spring_flip_p = 0.3;  // flips would be frequent
     (which == 0 ? opt.body_fixed : opt.springs_fixed) = true;
     const morph::Agent parent = agent(50 + which);
@@ -166,8 +166,8 @@ void expect_same_agent(const morph::Agent& c, const morph::Agent& p, const std::
 }
 
 TEST(EvolutionOffspring, NoFlipsNoJitterGiveTheParentBack) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
-  evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
+  evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
   opt.body_flip_p = opt.spring_flip_p = 0;
   opt.rest_jitter_sd = 0;
   evo::MutationOptions no_moves = opt;
@@ -183,8 +183,8 @@ TEST(EvolutionOffspring, NoFlipsNoJitterGiveTheParentBack) {
 }
 
 TEST(EvolutionOffspring, NoFlipsNoJitterKeepRestLengthsBitForBit) {
-  const evo::GdOptions gd = evo::gd_options(io::default_config().agents);
-  evo::MutationOptions opt = evo::mutation_options(io::default_config().agents);
+  const evo::GdOptions gd = evo::gd_options(config::default_config().agents);
+  evo::MutationOptions opt = evo::mutation_options(config::default_config().agents);
   opt.body_flip_p = opt.spring_flip_p = 0;
   opt.rest_jitter_sd = 0;
   for (int i = 0; i < 20; ++i) {

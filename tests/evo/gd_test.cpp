@@ -27,7 +27,7 @@ morph::Agent agent(uint64_t seed) {
 }
 
 evo::GdOptions short_opts(int epochs, int steps, evo::GdRule rule = evo::GdRule::keep_best) {
-  evo::GdOptions o = evo::gd_options(io::default_config().agents);
+  evo::GdOptions o = evo::gd_options(config::default_config().agents);
   o.epochs = epochs;
   o.steps = steps;
   o.rule = rule;
@@ -293,7 +293,7 @@ void expect_well_formed(const morph::Agent& a, const evo::GdOptions& opt, const 
 }
 
 TEST(GdMoveRest, RandomMovesKeepBoundsOrLeaveTheAgentAlone) {
-  const evo::GdOptions opt = evo::gd_options(io::default_config().agents);
+  const evo::GdOptions opt = evo::gd_options(config::default_config().agents);
   Rng rng = make_rng(3, 9, 0);
   int moved = 0, refused = 0;
   for (int t = 0; t < 300; ++t) {
@@ -323,7 +323,7 @@ std::vector<double> scaling(const morph::Agent& a, double s) {
 }
 
 TEST(GdMoveRest, HalvesTheMoveUpToFourTimesThenRefuses) {
-  const evo::GdOptions opt = evo::gd_options(io::default_config().agents);  // rest lengths in [0.025, 0.075]
+  const evo::GdOptions opt = evo::gd_options(config::default_config().agents);  // rest lengths in [0.025, 0.075]
   const morph::Agent a0 = agent(21);
   for (double L : a0.rest_length) ASSERT_NEAR(L, 0.05, 1e-15);
   struct Case {
@@ -349,7 +349,7 @@ TEST(GdMoveRest, HalvesTheMoveUpToFourTimesThenRefuses) {
 }
 
 TEST(GdMoveRest, ATranslationIsUndoneByTheShift) {
-  const evo::GdOptions opt = evo::gd_options(io::default_config().agents);
+  const evo::GdOptions opt = evo::gd_options(config::default_config().agents);
   const morph::Agent a0 = agent(22);
   morph::Agent a = a0;
   std::vector<double> d(2 * kM);

@@ -38,7 +38,7 @@ std::string drive_into(const std::string& name, mpi::Plan& plan, int every, cons
     io::h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
     H5Pset_fapl_mpio(fapl.id(), MPI_COMM_WORLD, MPI_INFO_NULL);
     io::h5::File f = io::h5::File::create(path, true, fapl.id());
-    io::RunConfig cfg = io::default_config();
+    config::RunConfig cfg = config::default_config();
     cfg.run.progress_every_s = 0;
     cfg.output.checkpoint_every = every;
     mpi::drive(MPI_COMM_WORLD, cfg, f, plan, checkpoint);

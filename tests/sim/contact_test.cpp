@@ -25,7 +25,7 @@ sim::Scene pair_in(const std::string& env, sim::ContactLaw law) {
   sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, law);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx - 0.047, law);
+  s.env = config::place_environment(config::environment_table(env), mx - 0.047, law);
   return s;
 }
 
@@ -86,7 +86,7 @@ TEST(NoSlip, RetentionKeepsPartOfTheTangentialVelocity) {
 
 // in every environment, under either law, no mass ends a step below the ground under it
 TEST(NoSlip, NoMassEndsBelowTheFloor) {
-  for (const std::string& env : io::environment_names())
+  for (const std::string& env : config::environment_names())
     for (sim::ContactLaw law : {sim::ContactLaw::coulomb, sim::ContactLaw::no_slip}) {
       SCOPED_TRACE(env + " " + sim::contact_law_name(law));
       const sim::Scene s = pair_in(env, law);
@@ -110,7 +110,7 @@ TEST(NoSlip, ScenesCarryTheLawTheyAreGiven) {
   for (int round = 0; round < 2; ++round)  // the other law built in between: nothing carries over
     for (sim::ContactLaw law : {sim::ContactLaw::no_slip, sim::ContactLaw::coulomb}) {
       SCOPED_TRACE(sim::contact_law_name(law));
-      EXPECT_EQ(io::place_environment(io::environment_table("ice"), 0.3, law).contact, law);
+      EXPECT_EQ(config::place_environment(config::environment_table("ice"), 0.3, law).contact, law);
       EXPECT_EQ(collective::agent_scene(f.p, "sand", law).env.contact, law);
       EXPECT_EQ(collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), "flat", law).env.contact, law);
       EXPECT_EQ(collective::chain_scene(chain, f.conn, testing::weak_connector(), "ice", law).env.contact, law);
@@ -165,8 +165,8 @@ TEST(NoSlip, TheLawASceneIsBuiltWithReachesTheEngine) {
 // the re-reading of the paper's friction f as kappa_ns = max(0, 1 − 1/f): ice 1.5 → 1/3, every other
 // environment (default 1.0, sticky 0.85, sand) 0
 TEST(NoSlip, EnvironmentsKeepTheDocumentedTangentialShare) {
-  for (const std::string& env : io::environment_names()) {
-    const double keep = io::environment_table(env).physics.no_slip_keep;
+  for (const std::string& env : config::environment_names()) {
+    const double keep = config::environment_table(env).physics.no_slip_keep;
     if (env == "ice") {
       EXPECT_NEAR(keep, 1.0 - 1.0 / 1.5, 1e-15);
     } else {

@@ -29,7 +29,7 @@ sim::Scene free_masses(int n) {
     s.x0.push_back(10.0 + 0.01 * i);
     s.mass.push_back(1.0);
   }
-  s.env = io::place_environment(io::environment_table("flat"), 1.0, testing::kCoulomb);
+  s.env = config::place_environment(config::environment_table("flat"), 1.0, testing::kCoulomb);
   return s;
 }
 
@@ -141,7 +141,7 @@ bool at_wall_face(const sim::Environment& env, double x) {
 class NoPenetration : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
-  const bool features = io::environment_table(GetParam()).relative.size() > 0;
+  const bool features = config::environment_table(GetParam()).relative.size() > 0;
   const double allowed = features ? 5e-3 : 1e-9;  // u
   for (uint64_t seed = 0; seed < 3; ++seed) {
     const morph::Agent a = make_agent(10 + seed), b = make_agent(20 + seed);
@@ -150,7 +150,7 @@ TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
     sim::Scene s = collective::pair_scene(a, b, conn, testing::weak_connector(), GetParam(), testing::kCoulomb);
     double mx = -1e9;
     for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-    s.env = io::place_environment(io::environment_table(GetParam()), mx - 0.047, testing::kCoulomb);
+    s.env = config::place_environment(config::environment_table(GetParam()), mx - 0.047, testing::kCoulomb);
     sim::RunOptions opt;
     opt.steps = 2000;
     opt.record = true;
@@ -176,7 +176,7 @@ TEST_P(NoPenetration, LongRandomRunsStayAboveFloorsAndOutOfWalls) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(io::environment_names()),
+INSTANTIATE_TEST_SUITE_P(EveryEnvironment, NoPenetration, ::testing::ValuesIn(config::environment_names()),
                          [](const auto& info) { return info.param; });
 
 TEST(Engine, ForwardWithoutTapeIsBitIdenticalToTapedRun) {
@@ -238,7 +238,7 @@ TEST(Engine, TwentyAgentChainIsFiniteInEveryEnvironment) {
   for (int q = 0; q < 20; ++q) agents.push_back(make_agent(100 + q));
   std::vector<const morph::Agent*> ptr;
   for (const auto& a : agents) ptr.push_back(&a);
-  for (const std::string& env : io::environment_names()) {
+  for (const std::string& env : config::environment_names()) {
     const sim::Scene s = collective::chain_scene(ptr, make_conn(9), testing::weak_connector(), env, testing::kCoulomb);
     sim::RunOptions opt;
     opt.steps = 500;

@@ -30,7 +30,7 @@ sim::Scene pair_in(const std::string& env, double back = 0.047) {
   sim::Scene s = collective::pair_scene(f.p, f.a, f.conn, testing::weak_connector(), env, testing::kCoulomb);
   double mx = -1e9;
   for (int i = 0; i < s.n_masses(); ++i) mx = std::max(mx, s.x0[2 * i]);
-  s.env = io::place_environment(io::environment_table(env), mx - back, testing::kCoulomb);
+  s.env = config::place_environment(config::environment_table(env), mx - back, testing::kCoulomb);
   return s;
 }
 
@@ -130,7 +130,7 @@ TEST_P(Gradient, AllFourBlocksMatchCentralDifferences) {
   check_blocks(s, r, GetParam());
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryEnvironment, Gradient, ::testing::ValuesIn(io::environment_names()),
+INSTANTIATE_TEST_SUITE_P(EveryEnvironment, Gradient, ::testing::ValuesIn(config::environment_names()),
                          [](const auto& info) { return info.param; });
 
 // connectors.damping: the connector springs' dashpots (SPEC §2.2's −c_s((v_i − v_j)·d̂)d̂, the adjoint's DASHPOTS

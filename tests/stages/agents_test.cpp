@@ -15,7 +15,7 @@ namespace {
 
 constexpr int M11 = sim::kAgentMasses, S21 = sim::kAgentSprings;
 
-io::RunConfig config() {
+config::RunConfig config() {
   return test::tiny({"agents.population=4", "agents.generations=2", "agents.epochs=1", "agents.episode_steps=60",
                      "agents.uniqueness_k=2"});
 }
@@ -54,7 +54,7 @@ std::vector<evo::Individual> survivors(const test::Datasets& d, const std::strin
 }
 
 TEST(AgentsPlan, RecordsEveryGenerationAndTheFinalPopulation) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   const int P = cfg.agents.population, G = cfg.agents.generations;
   const auto plan = make_agents_plan(agents_def(cfg), AgentsSpec{}, {});
   EXPECT_EQ(plan->rounds(), G + 1);
@@ -87,10 +87,10 @@ TEST(AgentsPlan, RecordsEveryGenerationAndTheFinalPopulation) {
 }
 
 TEST(AgentsPlan, GenerationZeroIsEachRandomAgentTrainedByGradientDescent) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   const auto plan = make_agents_plan(agents_def(cfg), AgentsSpec{}, {});
   const test::Datasets d = test::written(run_serial(*plan));
-  evo::GdOptions gd = evo::gd_options(io::default_config().agents);
+  evo::GdOptions gd = evo::gd_options(config::default_config().agents);
   gd.epochs = cfg.agents.epochs;
   gd.steps = cfg.agents.episode_steps;
   gd.rule = evo::gd_rule_from(cfg.agents.gd_rule);
@@ -118,7 +118,7 @@ TEST(AgentsPlan, GenerationZeroIsEachRandomAgentTrainedByGradientDescent) {
 }
 
 TEST(AgentsPlan, AWorkersPlanAndAnyComputeOrderGiveTheSameGenerations) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   const auto plain = make_agents_plan(agents_def(cfg), AgentsSpec{}, {});
   const test::Datasets want = test::written(run_serial(*plain));
   // a worker's plan has no population (the runner clears it on every rank but the master)
@@ -133,7 +133,7 @@ TEST(AgentsPlan, AWorkersPlanAndAnyComputeOrderGiveTheSameGenerations) {
 }
 
 TEST(AgentsPlan, AResumeFromACommittedGenerationContinuesAsAnUninterruptedRun) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   const auto plain = make_agents_plan(agents_def(cfg), AgentsSpec{}, {});
   const test::Datasets want = test::written(run_serial(*plain));
   for (int cut = 1; cut <= cfg.agents.generations; ++cut) {
@@ -151,7 +151,7 @@ TEST(AgentsPlan, AResumeFromACommittedGenerationContinuesAsAnUninterruptedRun) {
 }
 
 TEST(AgentsPlan, AFixedBodyAndSpringsReachEveryAgentOfGenerationZero) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   Rng rng = make_rng(5, 5, 5);
   const morph::Agent body = collective::random_agent(rng);
   AgentsSpec spec;
@@ -173,7 +173,7 @@ TEST(AgentsPlan, AFixedBodyAndSpringsReachEveryAgentOfGenerationZero) {
 
 
 TEST(AgentsPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
-  const io::RunConfig cfg = config();
+  const config::RunConfig cfg = config();
   auto make = [&] { return make_agents_plan(agents_def(cfg), AgentsSpec{}, {}); };
   test::expect_driver_and_serial_calls_agree(make);
   // resumed: the runner builds the plan from the last committed generation's survivors

@@ -13,7 +13,7 @@ namespace {
 
 // a deployment of weak_uniform and weak_diverse connectors in two environments, and what the analyses read of it
 struct Case {
-  io::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "deploy.episode_steps=60", "deploy.pairs=3",
+  config::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "deploy.episode_steps=60", "deploy.pairs=3",
                                   "deploy.hidden_subsample=60", "connectors.kinds=weak_uniform,weak_diverse",
                                   "connectors.replicates=2", "analysis.max_states=40",
                                   "analysis.bootstrap_resamples=100"});
@@ -53,7 +53,7 @@ struct Case {
     return make_adversity_plan(analysis_def(cfg), agents, weights, pairs, {0, 3}, 4, {"ice"}, std::move(d));
   }
   std::unique_ptr<Plan> familiarity() const { return familiarity(cfg); }
-  std::unique_ptr<Plan> familiarity(const io::RunConfig& with) const {
+  std::unique_ptr<Plan> familiarity(const config::RunConfig& with) const {
     std::array<std::vector<float>, 2> hidden;
     for (int t = 0; t < 2; ++t)
       for (double v : test::at(deployed, "deploy/hidden/" + kAnalysisTypes[t] + "/states").values)
@@ -129,7 +129,7 @@ TEST(FamiliarityPlan, FitsEachNovelEnvironmentAgainstFlatAndTabulatesTheCells) {
 TEST(FamiliarityPlan, TheCalibratedScaleCountsTheSameFitsAsThatCellScaleWould) {
   const Case c;
   const test::Datasets unit = test::written(run_serial(*c.familiarity()));
-  io::RunConfig both = c.cfg, fine = c.cfg;
+  config::RunConfig both = c.cfg, fine = c.cfg;
   both.analysis.calibrated_cell_scale = 3.0;
   fine.analysis.cell_scale = 3.0;
   const test::Datasets d = test::written(run_serial(*c.familiarity(both)));

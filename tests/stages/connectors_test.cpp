@@ -13,7 +13,7 @@ namespace divcoll::stages {
 namespace {
 
 struct Case {
-  io::RunConfig cfg;
+  config::RunConfig cfg;
   std::vector<morph::Agent> agents = test::random_population(4);
   std::vector<ConnectorSlot> slots;
   TrainSpec spec;
@@ -73,7 +73,7 @@ TEST(ConnectorsPlan, TheFirstIterationsCurveIsTheMeanOfItsPairEpisodes) {
     Rng batch = make_rng(c.cfg.run.seed, slot.stream, 0);
     const auto pairs = slot.diverse ? collective::random_pairs(batch, 4, c.spec.batch_pairs)
                                     : collective::uniform_pairs(c.spec.batch_pairs);
-    collective::ProbeSum sum;
+    evo::ProbeSum sum;
     for (const auto& [a, b] : pairs)
       sum.add(collective::run_pair(sim, c.agents[a], c.agents[b], w, slot.tether, "flat", sim::ContactLaw::coulomb, ro, nullptr));
     const double want = sum.mean().travel_u;
@@ -101,7 +101,7 @@ TEST(ConnectorsPlan, AResumeFromACommittedIterationContinuesAsAnUninterruptedRun
 
 TEST(ConnectorsPlan, TheExtendedPlanKeepsTheBestWeightsAndResumesToTheSameRun) {
   const Case c({"connectors.keep_best=true", "connectors.validation_pairs=2", "connectors.lr_schedule=cosine"});
-  ASSERT_TRUE(collective::extended(collective::opt_settings(c.cfg.connectors)));
+  ASSERT_TRUE(evo::extended(evo::opt_settings(c.cfg.connectors)));
   const auto plan = c.plan();
   EXPECT_TRUE(plan->closing_round());
   const SerialRun run = run_serial(*plan);

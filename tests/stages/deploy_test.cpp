@@ -13,7 +13,7 @@ namespace divcoll::stages {
 namespace {
 
 struct Case {
-  io::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "deploy.episode_steps=80", "deploy.pairs=3",
+  config::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "deploy.episode_steps=80", "deploy.pairs=3",
                                   "deploy.early_step=20", "deploy.hidden_subsample=30",
                                   "connectors.kinds=weak_uniform,weak_diverse"});
   std::vector<morph::Agent> agents = test::random_population(4);
@@ -87,7 +87,7 @@ TEST(DeployPlan, EachEpisodeIsTheDirectSimulationOfItsAgentOrPair) {
 TEST(DeployPlan, ReferenceConnectorsAreRecordedBesideAndDoNotChangeTheTrainedTypes) {
   const Case plain;
   Case refs;
-  refs.cfg = io::apply_overrides(refs.cfg, {"deploy.references=true"});
+  refs.cfg = config::apply_overrides(refs.cfg, {"deploy.references=true"});
   const test::Datasets without = test::written(run_serial(*plain.plan()));
   const SerialRun run = run_serial(*refs.plan());
   const test::Datasets with = test::written(run);

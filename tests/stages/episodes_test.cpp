@@ -14,7 +14,7 @@ namespace divcoll::stages {
 namespace {
 
 struct Case {
-  io::RunConfig cfg = test::tiny({"deploy.episode_steps=60", "deploy.pairs=2", "specialists.replicates=2"});
+  config::RunConfig cfg = test::tiny({"deploy.episode_steps=60", "deploy.pairs=2", "specialists.replicates=2"});
   std::vector<morph::Agent> agents = test::random_population(4);
   std::vector<std::string> envs = novel_environments(cfg.deploy);
   std::vector<std::vector<double>> weights;  // environment · R + replicate
@@ -35,7 +35,7 @@ struct Case {
     };
     auto summary = [](int, const std::vector<EpisodeDone>& d) { return std::to_string(ok_mean(d, 0, d.size()).first); };
     return std::make_unique<EpisodesPlan>("specialists deploy", "specialists", agents, weights,
-                                          collective::tether(cfg.connectors, "weak_diverse"), io::run_physics(cfg), envs, cfg.deploy.episode_steps,
+                                          collective::tether(cfg.connectors, "weak_diverse"), config::run_physics(cfg), envs, cfg.deploy.episode_steps,
                                           std::vector<EpisodesPlan::Part>{{"specialists", {2, 2}}}, round_items, summary);
   }
 };

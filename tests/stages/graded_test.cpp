@@ -31,7 +31,7 @@ TEST(Graded, TheShapeIsTheCommonestBodyAndItsCommonestSprings) {
 }
 
 TEST(Graded, ThePopulationsEvolveOneBodyAndTheSecondOneSpringGenotypeWithoutEvolution) {
-  const io::RunConfig cfg = test::tiny({"agents.episode_steps=40", "agents.epochs=1", "graded.population=3",
+  const config::RunConfig cfg = test::tiny({"agents.episode_steps=40", "agents.epochs=1", "graded.population=3",
                                         "agents.uniqueness_k=2"});
   Rng rng = make_rng(8, 8, 8);
   const morph::Agent body = collective::random_agent(rng);
@@ -58,7 +58,7 @@ TEST(Graded, ThePopulationsEvolveOneBodyAndTheSecondOneSpringGenotypeWithoutEvol
 }
 
 TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
-  const io::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
+  const config::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
                                         "graded.population=3", "connectors.replicates=1", "agents.uniqueness_k=2"});
   const std::vector<morph::Agent> agents = test::random_population(3, 9);
   Rng wr = make_rng(2, 2, 2);
@@ -91,7 +91,7 @@ TEST(Graded, TheDeploymentRecordsAgentsAloneAndPairsInEveryEnvironment) {
 
 
 TEST(Graded, TheDriverAndTheSerialFarmMakeTheSameFarmCallsOfItsPopulationsAndTheirDeployment) {
-  const io::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
+  const config::RunConfig cfg = test::tiny({"deploy.environments=flat,gap", "deploy.episode_steps=60", "deploy.pairs=2",
                                         "graded.population=3", "connectors.replicates=1", "agents.uniqueness_k=2",
                                         "agents.episode_steps=40", "agents.epochs=1", "agents.generations=1"});
   // the populations through the agents plan

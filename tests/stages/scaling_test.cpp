@@ -14,7 +14,7 @@ namespace divcoll::stages {
 namespace {
 
 struct Case {
-  io::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "scaling.sizes=2,3", "scaling.draws=2",
+  config::RunConfig cfg = test::tiny({"deploy.environments=flat,ice", "scaling.sizes=2,3", "scaling.draws=2",
                                   "scaling.episode_steps=60", "connectors.replicates=1"});
   std::vector<morph::Agent> agents = test::random_population(4);
   std::vector<std::vector<double>> weights;  // weak uniform-trained, then weak diverse-trained

@@ -24,8 +24,8 @@ namespace divcoll::stages::test {
 using Datasets = std::map<std::string, Dataset>;
 
 // configs/tiny.toml with `overrides`
-inline io::RunConfig tiny(const std::vector<std::string>& overrides = {}) {
-  return io::load_config(testing::source_dir() + "/configs/tiny.toml", overrides);
+inline config::RunConfig tiny(const std::vector<std::string>& overrides = {}) {
+  return config::load_config(testing::source_dir() + "/configs/tiny.toml", overrides);
 }
 
 // n random agents with their anchors (computed, as load_population does before the connectors stage stores them)

@@ -142,9 +142,9 @@ TEST_F(StudyFolder, ADamagedManifestIsSaid) {
 
 TEST(StudyFolderFiles, SummaryPathsAndTheKeysThatDoNotCount) {
   EXPECT_EQ(summary_path("d/v/seed3.h5"), fs::path("d/v/seed3.summary.json"));
-  const io::RunConfig a = io::load_config(testing::source_dir() + "/configs/tiny.toml");
-  EXPECT_EQ(first_difference(a, io::apply_overrides(a, {"run.progress_every_s=5", "output.dir=elsewhere"})), "");
-  EXPECT_EQ(first_difference(a, io::apply_overrides(a, {"deploy.pairs=3"})), "deploy.pairs (4 -> 3)");
+  const config::RunConfig a = config::load_config(testing::source_dir() + "/configs/tiny.toml");
+  EXPECT_EQ(first_difference(a, config::apply_overrides(a, {"run.progress_every_s=5", "output.dir=elsewhere"})), "");
+  EXPECT_EQ(first_difference(a, config::apply_overrides(a, {"deploy.pairs=3"})), "deploy.pairs (4 -> 3)");
   EXPECT_FALSE(run_file_complete("/nowhere/seed1.h5"));
 }
 

@@ -15,10 +15,10 @@
 namespace divcoll {
 namespace {
 
-using collective::ConnectorOptimizer;
-using collective::OptSettings;
-using collective::Probe;
-using collective::ProbeResult;
+using evo::ConnectorOptimizer;
+using evo::OptSettings;
+using evo::Probe;
+using evo::ProbeResult;
 
 // a known objective: travel(θ) = −|θ − c|², its gradient −2(θ − c)
 ProbeResult quadratic(const std::vector<double>& w, bool grad) {
@@ -43,7 +43,7 @@ std::vector<ProbeResult> evaluate(const std::vector<Probe>& probes) {
 // mean and counted, so it cannot turn the weights into NaN (seen in float_networks at paper scale: 3 of 20 strong
 // connectors, postprocess/RESULTS.md "The whole paper in float")
 TEST(ConnectorOpt, APairWithANonFiniteGradientIsLeftOutAndCounted) {
-  collective::ProbeSum sum;
+  evo::ProbeSum sum;
   collective::PairOutcome good, overflowed, failed;
   good.travel_u = 0.5, good.travel_bl = 2.0, good.grad = {1.0, -2.0};
   overflowed.travel_u = 0.7, overflowed.travel_bl = 3.0, overflowed.grad = {INFINITY, 1.0};
@@ -57,7 +57,7 @@ TEST(ConnectorOpt, APairWithANonFiniteGradientIsLeftOutAndCounted) {
   EXPECT_EQ(r.grad, (std::vector<double>{1.0, -2.0}));
   collective::PairOutcome nan_grad = good;
   nan_grad.grad[1] = NAN;
-  collective::ProbeSum only_bad;
+  evo::ProbeSum only_bad;
   only_bad.add(nan_grad);
   EXPECT_EQ(only_bad.mean().ok, 0);
   EXPECT_TRUE(std::isnan(only_bad.mean().travel_bl));
@@ -69,7 +69,7 @@ TEST(ConnectorOpt, APairRedoneInDoubleCountsInTheMeanAndIsCounted) {
   collective::PairOutcome a, b;
   a.travel_u = 0.5, a.travel_bl = 2.0, a.grad = {1.0, -2.0};
   b.travel_u = 0.3, b.travel_bl = 1.0, b.grad = {3.0, 4.0}, b.redone_in_double = true;
-  collective::ProbeSum sum;
+  evo::ProbeSum sum;
   sum.add(a), sum.add(b);
   const ProbeResult r = sum.mean();
   EXPECT_EQ(r.ok, 2);
@@ -88,11 +88,11 @@ TEST(ConnectorOpt, PerPairClippingKeepsAnExplodingPairFromSettingTheDirection) {
   for (int k = 0; k < 4; ++k) batch[k].travel_u = 0.1, batch[k].travel_bl = 0.5, batch[k].grad = {0.5, 0.0};
   batch[4].travel_u = 0.1, batch[4].travel_bl = 0.5, batch[4].grad = {0.0, 1000.0};
   auto step = [&](const std::string& clip) {
-    OptSettings s = collective::opt_settings(io::default_config().connectors);
+    OptSettings s = evo::opt_settings(config::default_config().connectors);
     s.clip = clip;
     s.clip_norm = 1.0;
-    collective::ProbeSum sum;
-    sum.pair_clip = collective::pair_clip(s);
+    evo::ProbeSum sum;
+    sum.pair_clip = evo::pair_clip(s);
     for (const auto& o : batch) sum.add(o);
     ProbeResult r = sum.mean();
     for (double& x : r.grad) x = -x;  // loss = −travel, as the connectors stage
@@ -113,29 +113,29 @@ TEST(ConnectorOpt, PerPairClippingKeepsAnExplodingPairFromSettingTheDirection) {
   EXPECT_DOUBLE_EQ(pp[0], 0.01 * 2 / std::sqrt(5.0));
   EXPECT_DOUBLE_EQ(pp[1], 0.01 * 1 / std::sqrt(5.0));
   // per_pair leaves pairs within clip_norm bit for bit as the default does
-  collective::ProbeSum a, b;
+  evo::ProbeSum a, b;
   b.pair_clip = 1.0;
   for (int k = 0; k < 4; ++k) a.add(batch[k]), b.add(batch[k]);
   EXPECT_EQ(a.mean().grad, b.mean().grad);
-  EXPECT_EQ(collective::pair_clip(collective::opt_settings(io::default_config().connectors)), 0.0);  // the default: no per-pair clipping
+  EXPECT_EQ(evo::pair_clip(evo::opt_settings(config::default_config().connectors)), 0.0);  // the default: no per-pair clipping
 }
 
 TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
-  OptSettings s = collective::opt_settings(io::default_config().connectors);
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.lr = 0.01;
   s.lr_final = 0.1;
-  EXPECT_EQ(collective::scheduled_lr(s, 0, 50), 0.01);
-  EXPECT_EQ(collective::scheduled_lr(s, 49, 50), 0.01);  // constant
+  EXPECT_EQ(evo::scheduled_lr(s, 0, 50), 0.01);
+  EXPECT_EQ(evo::scheduled_lr(s, 49, 50), 0.01);  // constant
   s.lr_schedule = "cosine";
-  EXPECT_DOUBLE_EQ(collective::scheduled_lr(s, 0, 51), 0.01);
-  EXPECT_DOUBLE_EQ(collective::scheduled_lr(s, 25, 51), 0.01 * (0.1 + 0.9 * 0.5));
-  EXPECT_DOUBLE_EQ(collective::scheduled_lr(s, 50, 51), 0.001);
-  for (int it = 1; it < 51; ++it) EXPECT_LT(collective::scheduled_lr(s, it, 51), collective::scheduled_lr(s, it - 1, 51));
+  EXPECT_DOUBLE_EQ(evo::scheduled_lr(s, 0, 51), 0.01);
+  EXPECT_DOUBLE_EQ(evo::scheduled_lr(s, 25, 51), 0.01 * (0.1 + 0.9 * 0.5));
+  EXPECT_DOUBLE_EQ(evo::scheduled_lr(s, 50, 51), 0.001);
+  for (int it = 1; it < 51; ++it) EXPECT_LT(evo::scheduled_lr(s, it, 51), evo::scheduled_lr(s, it - 1, 51));
   s.lr_schedule = "exponential";
-  EXPECT_DOUBLE_EQ(collective::scheduled_lr(s, 0, 11), 0.01);
-  EXPECT_DOUBLE_EQ(collective::scheduled_lr(s, 10, 11), 0.001);
+  EXPECT_DOUBLE_EQ(evo::scheduled_lr(s, 0, 11), 0.01);
+  EXPECT_DOUBLE_EQ(evo::scheduled_lr(s, 10, 11), 0.001);
   for (int it = 1; it < 11; ++it)  // geometric: the same ratio every iteration
-    EXPECT_NEAR(collective::scheduled_lr(s, it, 11) / collective::scheduled_lr(s, it - 1, 11), std::pow(0.1, 0.1), 1e-12);
+    EXPECT_NEAR(evo::scheduled_lr(s, it, 11) / evo::scheduled_lr(s, it - 1, 11), std::pow(0.1, 0.1), 1e-12);
   // and the optimizer uses it: normalized steps of length lr_t
   s.optimizer = "normalized";
   ConnectorOptimizer opt(s, std::vector<double>(4, 5.0), 11, 1, 1);
@@ -144,12 +144,12 @@ TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
     opt.tell(it, evaluate(opt.ask(it)), NAN);
     double d = 0;
     for (size_t q = 0; q < before.size(); ++q) d += (opt.current()[q] - before[q]) * (opt.current()[q] - before[q]);
-    EXPECT_NEAR(std::sqrt(d), collective::scheduled_lr(s, it, 11), 1e-12);
+    EXPECT_NEAR(std::sqrt(d), evo::scheduled_lr(s, it, 11), 1e-12);
   }
 }
 
 TEST(ConnectorOpt, KeepBestReturnsTheValidationBestWeights) {
-  OptSettings s = collective::opt_settings(io::default_config().connectors);
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.keep_best = true;
   s.lr = 0.05;
   const int I = 12;
@@ -175,7 +175,7 @@ TEST(ConnectorOpt, KeepBestReturnsTheValidationBestWeights) {
 }
 
 TEST(ConnectorOpt, GradientAveragingIsAntitheticAndExactOnAQuadratic) {
-  OptSettings s = collective::opt_settings(io::default_config().connectors);
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.grad_samples = 4;
   s.grad_sigma = 0.05;
   std::vector<double> init = {0.5, -0.2, 0.1, 0.9, 0.0, 0.3};
@@ -202,7 +202,7 @@ TEST(ConnectorOpt, GradientAveragingIsAntitheticAndExactOnAQuadratic) {
 }
 
 TEST(ConnectorOpt, CmaesImprovesAKnownObjectiveAndResumesFromItsFitness) {
-  OptSettings s = collective::opt_settings(io::default_config().connectors);
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.optimizer = "cmaes";
   s.es_popsize = 12;
   s.es_sigma = 0.1;
@@ -237,7 +237,7 @@ TEST(ConnectorOpt, CmaesImprovesAKnownObjectiveAndResumesFromItsFitness) {
 }
 
 TEST(ConnectorOpt, AntitheticEsImprovesAKnownObjectiveAndResumesFromItsState) {
-  OptSettings s = collective::opt_settings(io::default_config().connectors);
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.optimizer = "es";
   s.es_popsize = 10;
   s.es_sigma = 0.05;
