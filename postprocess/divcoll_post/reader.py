@@ -207,9 +207,15 @@ def open_file(path) -> Iterator["h5py.File"]:
         f.close()
 
 
+def _is_group(obj) -> bool:
+    """an h5py group, or a group of the labelled reader"""
+    return isinstance(obj, (h5py.Group, Group))
+
+
 def stage_status(f, stage: str) -> Optional[str]:
-    """the stage's `status` attribute ("complete", "running", ...), "?" when it has none, None without the group"""
-    if stage not in f or not isinstance(f[stage], h5py.Group):
+    """the stage's `status` attribute ("complete", "running", ...), "?" when it has none, None without the group
+    (`f`: a file open with open_file() or open())"""
+    if stage not in f or not _is_group(f[stage]):
         return None
     return text(f[stage].attrs.get("status", "?"))
 
@@ -220,8 +226,8 @@ def complete(f, stage: str) -> bool:
 
 
 def require_stage(f, path, stage: str):
-    """the stage's group; StageMissing without it"""
-    if stage not in f or not isinstance(f[stage], h5py.Group):
+    """the stage's group; StageMissing without it (`f`: a file open with open_file() or open())"""
+    if stage not in f or not _is_group(f[stage]):
         raise StageMissing(f"{path}: run file has no {stage} stage (run the {stage} stage first)")
     return f[stage]
 
@@ -231,16 +237,32 @@ def dataset(f, path, name: str, shape: Optional[Tuple[int, ...]] = None,
     """The dataset `name` as numpy, refused unless it has `shape` and (when the file names its axes: the run-file
     schema's `axes` attribute) the axes `axes`. StageMissing when it is not there."""
     if name not in f or not isinstance(f[name], h5py.Dataset):
-        stage = name.split("/")[0]
-        st = text(f[stage].attrs.get("status", "?")) if stage in f else "absent"
-        raise StageMissing(f"{path}: /{name} missing (the {stage} stage has status '{st}': "
-                           f"run the {stage} stage to the end first)")
+        _missing(f, path, name)
     d = f[name]
     if shape is not None and tuple(d.shape) != tuple(shape):
         raise RunFileError(f"{path}: /{name} has shape {d.shape}, expected {tuple(shape)}")
     if axes is not None and "axes" in d.attrs and text(d.attrs["axes"]) != ",".join(axes):
         raise RunFileError(f"{path}: /{name} has axes {text(d.attrs['axes'])}, expected {','.join(axes)}")
     return d[()]
+
+
+def _missing(f, path, name: str):
+    stage = name.split("/")[0]
+    st = text(f[stage].attrs.get("status", "?")) if stage in f else "absent"
+    raise StageMissing(f"{path}: /{name} missing (the {stage} stage has status '{st}': "
+                       f"run the {stage} stage to the end first)")
+
+
+def labelled(run: "Run", name: str, dims: Sequence[str]):
+    """The dataset `name` of a run file open with open(), as the labelled reader gives it (an xarray.DataArray),
+    refused unless its dimensions are `dims`. StageMissing when it is not there; RunFileError when the file does
+    not name its axes."""
+    if name not in run or isinstance(run[name], Group):
+        _missing(run, run.path, name)
+    a = run[name]
+    if tuple(a.dims) != tuple(dims):
+        raise RunFileError(f"{run.path}: /{name} has axes {','.join(a.dims)}, expected {','.join(dims)}")
+    return a
 
 
 def envs_done(g, n: int) -> int:

@@ -37,8 +37,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .reader import (RunFileError, StageMissing, dataset, envs_done, list_attr, open_file, require_stage,  # noqa: F401
-                     text)
+from .reader import (RunFileError, StageMissing, dataset, envs_done, labelled, list_attr, open_file,  # noqa: F401
+                     require_stage, text)
+from .reader import open as open_run
 from .runfile import RunMeta, _meta
 
 BOOT_RESAMPLES = 1000
@@ -229,14 +230,15 @@ def _env_index(envs: List[str]) -> Dict[str, int]:
 
 @dataclasses.dataclass
 class Deploy:
-    """/deploy, cut to the environments that are done. Environments in run-file order, flat first."""
+    """/deploy, cut to the environments that are done, as the labelled reader gives it (xarray.DataArrays with
+    the run file's dimensions and labels). Environments in run-file order, flat first."""
 
     envs: List[str]
     types: List[str]
-    agents_travel: np.ndarray  # (E, P) BL
-    agents_status: np.ndarray  # (E, P)
-    coll_travel: np.ndarray  # (E, T, R, NP) BL
-    coll_status: np.ndarray  # (E, T, R, NP)
+    agents_travel: "xarray.DataArray"  # (env, agent) BL
+    agents_status: "xarray.DataArray"  # (env, agent)
+    coll_travel: "xarray.DataArray"  # (env, type, replicate, pair) BL
+    coll_status: "xarray.DataArray"  # (env, type, replicate, pair)
     envs_total: int
     status: str
     diverse_pairs: Optional[np.ndarray] = None
@@ -247,23 +249,26 @@ class Deploy:
 
     @property
     def replicates(self) -> int:
-        return int(self.coll_travel.shape[2])
+        return int(self.coll_travel.sizes["replicate"])
 
     @property
     def pairs(self) -> int:
-        return int(self.coll_travel.shape[3])
+        return int(self.coll_travel.sizes["pair"])
 
-    def agents(self, env: str) -> Tuple[np.ndarray, np.ndarray]:
+    @property
+    def agents_alone(self) -> int:
+        """agents alone per environment"""
+        return int(self.agents_travel.sizes["agent"])
+
+    def agents(self, env: str):
         """(travel, status) of every agent alone in `env`."""
-        e = self.envs.index(env)
-        return self.agents_travel[e], self.agents_status[e]
+        return self.agents_travel.sel(env=env), self.agents_status.sel(env=env)
 
-    def collective(self, type_: str, env: str) -> Tuple[np.ndarray, np.ndarray]:
-        """(travel, status) (R × NP) of deployment type `type_` ("<kind>@uniform|diverse") in `env`."""
+    def collective(self, type_: str, env: str):
+        """(travel, status) (replicate × pair) of deployment type `type_` ("<kind>@uniform|diverse") in `env`."""
         if type_ not in self.types:
             raise StageMissing(f"deployment type {type_} is not in this run file (types: {', '.join(self.types)})")
-        e, t = self.envs.index(env), self.types.index(type_)
-        return self.coll_travel[e, t], self.coll_status[e, t]
+        return self.coll_travel.sel(env=env, type=type_), self.coll_status.sel(env=env, type=type_)
 
     def agents_stat(self, envs: Sequence[str], err: str = "ci", **kw) -> Stat:
         return stat([self.agents(e) for e in envs], err=err, **kw)
@@ -272,9 +277,17 @@ class Deploy:
         return stat([self.collective(type_, e) for e in envs], err=err, **kw)
 
 
+def _labels(a, dim: str, want: List[str], where: str):
+    """refuse an array whose labels along `dim` are not the stage's list `want`"""
+    got = [str(x) for x in a[dim].values] if dim in a.coords else None
+    if got != want:
+        raise RunFileError(f"{where}/{a.name}: {dim} labels {','.join(got) if got else '(none)'}, expected the "
+                           f"stage's {','.join(want)}")
+
+
 def load_deploy(path) -> Deploy:
-    with open_file(path) as f:
-        g = require_stage(f, path, "deploy")
+    with open_run(path) as run:
+        g = require_stage(run, path, "deploy")
         where = f"{path}: /deploy"
         envs = list_attr(g, "environments", where)
         types = list_attr(g, "types", where)
@@ -283,18 +296,20 @@ def load_deploy(path) -> Deploy:
             raise StageMissing(f"{path}: the deploy stage has no finished environment yet "
                                f"(status '{text(g.attrs.get('status', '?'))}'; run the deploy stage first)")
         alone, pairs = ("env", "agent"), ("env", "type", "replicate", "pair")
-        at = dataset(f, path, "deploy/agents/travel_bl", axes=alone)
-        ast = dataset(f, path, "deploy/agents/status", at.shape, alone)
-        ct = dataset(f, path, "deploy/collectives/travel_bl", axes=pairs)
-        cst = dataset(f, path, "deploy/collectives/status", ct.shape, pairs)
-        if at.ndim != 2 or at.shape[0] != len(envs):
-            raise RunFileError(f"{where}/agents/travel_bl: shape {at.shape}, expected ({len(envs)}, population)")
-        if ct.ndim != 4 or ct.shape[0] != len(envs) or ct.shape[1] != len(types):
-            raise RunFileError(f"{where}/collectives/travel_bl: shape {ct.shape}, expected "
-                               f"({len(envs)}, {len(types)}, replicates, pairs)")
-        dp = f["deploy/diverse_pairs"][()] if "deploy/diverse_pairs" in f else None
-        return Deploy(envs=envs[:done], types=types, agents_travel=at[:done], agents_status=ast[:done],
-                      coll_travel=ct[:done], coll_status=cst[:done], envs_total=len(envs),
+        at, ast = (labelled(run, f"deploy/agents/{k}", alone) for k in ("travel_bl", "status"))
+        ct, cst = (labelled(run, f"deploy/collectives/{k}", pairs) for k in ("travel_bl", "status"))
+        for a in (at, ast, ct, cst):
+            _labels(a, "env", envs, where)
+        for a in (ct, cst):
+            _labels(a, "type", types, where)
+        if ast.shape != at.shape or cst.shape != ct.shape:
+            raise RunFileError(f"{where}: status shapes {ast.shape}, {cst.shape} differ from the travels' "
+                               f"{at.shape}, {ct.shape}")
+        dp = run["deploy/diverse_pairs"].values if "deploy/diverse_pairs" in run else None
+        finished = envs[:done]
+        return Deploy(envs=finished, types=types, agents_travel=at.sel(env=finished),
+                      agents_status=ast.sel(env=finished), coll_travel=ct.sel(env=finished),
+                      coll_status=cst.sel(env=finished), envs_total=len(envs),
                       status=text(g.attrs.get("status", "?")), diverse_pairs=dp)
 
 
@@ -417,10 +432,10 @@ def main_population(dep: Deploy, type_: str = "weak_diverse@diverse") -> GradedP
     """The main population as a graded setting: agents alone and `type_` collectives (E × R × NP)."""
     if type_ not in dep.types:
         raise StageMissing(f"deployment type {type_} is not in this run file (types: {', '.join(dep.types)})")
-    t = dep.types.index(type_)
     return GradedPopulation(name="main", diversity_sources=list(MAIN_SOURCES), envs=list(dep.envs),
-                            agents_travel=dep.agents_travel, agents_status=dep.agents_status,
-                            pairs_travel=dep.coll_travel[:, t], pairs_status=dep.coll_status[:, t])
+                            agents_travel=dep.agents_travel.values, agents_status=dep.agents_status.values,
+                            pairs_travel=dep.coll_travel.sel(type=type_).values,
+                            pairs_status=dep.coll_status.sel(type=type_).values)
 
 
 def load_graded(path) -> List[GradedPopulation]:

@@ -54,6 +54,14 @@ def deploy_numbers():
     return at, ast, ct, cst
 
 
+def schema_dataset(g, name, data, axes, **labels):
+    """a dataset with the attributes the run-file schema gives it: its axes and the labels of its labelled axes"""
+    g[name] = data
+    g[name].attrs["axes"] = axes
+    for axis, names in labels.items():
+        g[name].attrs[f"labels_{axis}"] = ",".join(names)
+
+
 def write_run(path, stages=("deploy", "scaling", "specialists", "graded"), deploy_envs_done=None):
     with h5py.File(path, "w") as f:
         f.attrs["format"] = "divcoll-run"
@@ -74,9 +82,12 @@ def write_run(path, stages=("deploy", "scaling", "specialists", "graded"), deplo
                 ast[deploy_envs_done:] = 0
                 ct[deploy_envs_done:] = 0.0
                 cst[deploy_envs_done:] = 0
-            d["agents/travel_bl"], d["agents/status"] = at, ast
-            d["collectives/travel_bl"], d["collectives/status"] = ct, cst
-            d["diverse_pairs"] = np.array([[0, 1], [1, 2], [3, 0]], np.int32)
+            for name, a in (("travel_bl", at), ("status", ast)):
+                schema_dataset(d, f"agents/{name}", a, "env,agent", env=ENVS)
+            for name, a in (("travel_bl", ct), ("status", cst)):
+                schema_dataset(d, f"collectives/{name}", a, "env,type,replicate,pair", env=ENVS, type=TYPES)
+            schema_dataset(d, "diverse_pairs", np.array([[0, 1], [1, 2], [3, 0]], np.int32), "pair,slot",
+                           slot=["posterior", "anterior"])
         if "scaling" in stages:
             s = f.create_group("scaling")
             s.attrs["status"] = "complete"

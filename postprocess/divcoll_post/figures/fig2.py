@@ -286,13 +286,13 @@ def draw(args) -> list:
                frameon=False, bbox_to_anchor=(0.5, 1 - 0.42 / fig_h))
     # footer: counts behind each bar and the episodes left out
     bad = {}
-    for i, t in enumerate(dep.types):
-        n = R.n_not_ok(dep.coll_travel[:, i], dep.coll_status[:, i])
+    for t in dep.types:
+        n = R.n_not_ok(dep.coll_travel.sel(type=t), dep.coll_status.sel(type=t))
         if n:
             bad[t] = n
     nb_agents = R.n_not_ok(dep.agents_travel, dep.agents_status)
     foot = (f"Means over ok episodes; per bar and environment {dep.replicates} replicates × {dep.pairs} pairs = "
-            f"{dep.replicates * dep.pairs} episodes; agents alone: {dep.agents_travel.shape[1]} agents per environment. "
+            f"{dep.replicates * dep.pairs} episodes; agents alone: {dep.agents_alone} agents per environment. "
             f"Episodes not ok (nan/unstable, left out): "
             + (", ".join(f"{k} {v}" for k, v in bad.items()) + (f", agents {nb_agents}" if nb_agents else "")
                if bad or nb_agents else "none") + ".")

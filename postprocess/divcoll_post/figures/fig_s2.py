@@ -132,7 +132,7 @@ def draw(args) -> list:
     bad_a = sum(R.n_not_ok(*dep.agents(e)) for e, *_ in rows)
     bad_g = sum(R.n_not_ok(*dep.collective(GENERALIST, e)) for e, *_ in rows)
     bad_s = R.n_not_ok(spec.travel, spec.status)
-    foot = (f"Per environment: {dep.agents_travel.shape[1]} agents alone; generalists {dep.replicates} × {dep.pairs} "
+    foot = (f"Per environment: {dep.agents_alone} agents alone; generalists {dep.replicates} × {dep.pairs} "
             f"pair episodes; each specialist {spec.travel.shape[2]} pair episodes. Means over ok episodes; not ok "
             f"(left out): agents {bad_a}, generalists {bad_g}, specialists {bad_s}.")
     if missing:
