@@ -11,11 +11,11 @@ the whole population.
 """
 import re
 import shlex
-import tomllib
 
 import numpy as np
 
-from .reader import complete, list_attr, open_file, text as _s  # noqa: E402
+from .reader import complete, list_attr  # noqa: E402
+from .reader import open as open_labelled  # noqa: E402
 from .results import ok_mean  # noqa: E402
 
 
@@ -35,27 +35,27 @@ class Episodes:
         self.run_arg = shlex.quote(run_arg)
         self.items = {}  # anchor -> Markdown text of the list item, in the order asked for
         self.envs, self.types, self.spec_envs, self.scale_envs, self.sizes = [], [], [], [], []
-        with open_file(run) as f:
-            cfg = tomllib.loads(_s(f.attrs.get("config", "")))
+        with open_labelled(run) as f:
+            cfg = f.config() or {}
             self.steps = {"deploy": cfg.get("deploy", {}).get("episode_steps"),
                           "scaling": cfg.get("scaling", {}).get("episode_steps")}
 
             def arrays(g):
-                return g["travel_bl"][()], g["status"][()]
+                return g.travel_bl, g.status
 
             if "deploy/collectives/travel_bl" in f and "deploy/agents/travel_bl" in f:
-                d = f["deploy"]
+                d = f.deploy
                 self.envs, self.types = list_attr(d, "environments"), list_attr(d, "types")
-                self.alone_t, self.alone_s = arrays(d["agents"])
-                self.coll_t, self.coll_s = arrays(d["collectives"])
-                self.envs = self.envs[: min(len(self.envs), self.coll_t.shape[0])]
+                self.alone_t, self.alone_s = arrays(d.agents)
+                self.coll_t, self.coll_s = arrays(d.collectives)
+                self.envs = self.envs[: min(len(self.envs), self.coll_t.sizes["env"])]
             if "specialists/travel_bl" in f and complete(f, "specialists"):
-                self.spec_envs = list_attr(f["specialists"], "environments")
-                self.spec_t, self.spec_s = arrays(f["specialists"])
+                self.spec_envs = list_attr(f.specialists, "environments")
+                self.spec_t, self.spec_s = arrays(f.specialists)
             if "scaling/travel_bl" in f and complete(f, "scaling"):
-                self.scale_envs = list_attr(f["scaling"], "environments")
-                self.sizes = [int(n) for n in f["scaling/sizes"][()]]
-                self.chain_t, self.chain_s = arrays(f["scaling"])
+                self.scale_envs = list_attr(f.scaling, "environments")
+                self.sizes = [int(n) for n in f.scaling.sizes.values]
+                self.chain_t, self.chain_s = arrays(f.scaling)
 
     def _add(self, anchor, what, args, out, stage):
         if anchor not in self.items:
@@ -68,20 +68,20 @@ class Episodes:
     def alone(self, env):
         if env not in self.envs:
             return None
-        e = self.envs.index(env)
-        i = _median_ok(self.alone_t[e], self.alone_s[e])
+        v, s = self.alone_t.sel(env=env).values, self.alone_s.sel(env=env).values
+        i = _median_ok(v, s)
         if i is None:
             return None
-        n = int(((self.alone_s[e] == 0) & np.isfinite(self.alone_t[e])).sum())
-        return self._add(f"ep-{env}-alone", f"agent {i} alone in {env}, {self.alone_t[e, i]:.3f} BL (median of {n} ok)",
+        n = int(((s == 0) & np.isfinite(v)).sum())
+        return self._add(f"ep-{env}-alone", f"agent {i} alone in {env}, {v[i]:.3f} BL (median of {n} ok)",
                          f"--what alone --env {env} --agent {i}", f"{env}_agent{i}.h5", "deploy")
 
     def pair(self, env, typ, pair=None, replicate=0):
         """the median ok pair of replicate 0 of a cell, or a given pair"""
         if env not in self.envs or typ not in self.types:
             return None
-        e, t = self.envs.index(env), self.types.index(typ)
-        v, s = self.coll_t[e, t, replicate], self.coll_s[e, t, replicate]
+        cell = dict(env=env, type=typ, replicate=replicate)
+        v, s = self.coll_t.sel(cell).values, self.coll_s.sel(cell).values
         fixed = pair is not None
         if not fixed:
             pair = _median_ok(v, s)
@@ -97,23 +97,23 @@ class Episodes:
     def specialist(self, env):
         if env not in self.spec_envs:
             return None
-        e = self.spec_envs.index(env)
-        q = _median_ok(self.spec_t[e, 0], self.spec_s[e, 0])
+        v, s = (a.sel(env=env, replicate=0).values for a in (self.spec_t, self.spec_s))
+        q = _median_ok(v, s)
         if q is None:
             return None
-        return self._add(f"ep-spec-{env}", f"the {env} specialist 0, pair {q}, {self.spec_t[e, 0, q]:.3f} BL (median ok)",
+        return self._add(f"ep-spec-{env}", f"the {env} specialist 0, pair {q}, {v[q]:.3f} BL (median ok)",
                          f"--what specialist --env {env} --replicate 0 --pair {q}", f"spec_{env}_r0_p{q}.h5", "deploy")
 
     def chain(self, env, size, variant):
         if env not in self.scale_envs or size not in self.sizes:
             return None
-        e, si, v = self.scale_envs.index(env), self.sizes.index(size), ["uniform", "diverse"].index(variant)
-        q = _median_ok(self.chain_t[e, si, v, 0], self.chain_s[e, si, v, 0])
+        cell = dict(env=env, size=size, variant=variant, replicate=0)
+        v, s = self.chain_t.sel(cell).values, self.chain_s.sel(cell).values
+        q = _median_ok(v, s)
         if q is None:
             return None
         return self._add(f"ep-chain-{env}-n{size}-{variant}",
-                         f"a {variant} chain of {size}, replicate 0, draw {q}, in {env}, "
-                         f"{self.chain_t[e, si, v, 0, q]:.3f} BL (median ok)",
+                         f"a {variant} chain of {size}, replicate 0, draw {q}, in {env}, {v[q]:.3f} BL (median ok)",
                          f"--what chain --env {env} --size {size} --variant {variant} --replicate 0 --draw {q}",
                          f"chain_{env}_n{size}_{variant}_r0_d{q}.h5", "scaling")
 
@@ -128,12 +128,13 @@ class Episodes:
                "back into that episode's travel bit for bit.", "",
                "| environment | agents alone | " + " | ".join(f"`{t}`" for t in self.types) + " |",
                "|---" * (len(self.types) + 2) + "|"]
-        for e, env in enumerate(self.envs):
+        for env in self.envs:
             cells = []
             a = self.alone(env)
-            cells.append(f"[{ok_mean(self.alone_t[e], self.alone_s[e])[0]:.3f}](#{a})" if a else "—")
-            for t, typ in enumerate(self.types):
-                m = ok_mean(self.coll_t[e, t], self.coll_s[e, t])[0]
+            m = ok_mean(self.alone_t.sel(env=env), self.alone_s.sel(env=env))[0]
+            cells.append(f"[{m:.3f}](#{a})" if a else "—")
+            for typ in self.types:
+                m = ok_mean(self.coll_t.sel(env=env, type=typ), self.coll_s.sel(env=env, type=typ))[0]
                 c = self.pair(env, typ)
                 cells.append(f"[{m:.3f}](#{c})" if c else ("—" if not np.isfinite(m) else f"{m:.3f}"))
             out.append(f"| {env} | " + " | ".join(cells) + " |")
