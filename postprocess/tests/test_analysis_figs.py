@@ -18,7 +18,7 @@ sys.path.insert(0, POST)
 sys.path.insert(0, HERE)
 
 from divcoll_post import analysis as A  # noqa: E402
-from test_figures import call, pdf_ok, png_ok  # noqa: E402
+from test_figures import call, pdf_ok, png_ok, schema_dataset  # noqa: E402
 from divcoll_post import single_run as claims  # noqa: E402
 from divcoll_post.figures import fig3  # noqa: E402
 from divcoll_post import report  # noqa: E402
@@ -131,19 +131,25 @@ def write_analysis(f, status="complete", flip=False, novel=NOVEL, tamper=False, 
                 emb[e, r, nt:nt + nn] = nv
                 ns[e, r] = nt, nn
                 counts[t][e, r] = hand_counts(tr, nv)
-        f[f"analysis/familiarity/{t}/embedding"] = emb
-        f[f"analysis/familiarity/{t}/n_states"] = ns
+        g = f.require_group("analysis/familiarity")
+        schema_dataset(g, f"{t}/embedding", emb, "novel_env,replicate,state,component", novel_env=novel)
+        schema_dataset(g, f"{t}/n_states", ns, "novel_env,replicate,source", novel_env=novel,
+                       source=["training", "novel"])
         c = counts[t].copy()
         if tamper and t == A.UNIFORM:
             c[:, 0, 0] += 3
-        f[f"analysis/familiarity/{t}/counts"] = c
+        schema_dataset(g, f"{t}/counts", c, "novel_env,replicate,count", novel_env=novel,
+                       count=["states_both", "states_train_only", "states_novel_only", "cells_both",
+                              "cells_train_only", "cells_novel_only"])
     if table:
         tab = np.zeros((len(novel), 3, 3))
         for e in range(len(novel)):
             for k in range(3):
                 d, u = counts[A.DIVERSE][e, :, k], counts[A.UNIFORM][e, :, k]
                 tab[e, k] = [d.mean(), u.mean(), A.welch(d, u)[2]]
-        f["analysis/familiarity/table"] = tab
+        schema_dataset(f["analysis/familiarity"], "table", tab, "novel_env,cell_class,table_column", novel_env=novel,
+                       cell_class=["both", "train_only", "novel_only"],
+                       table_column=["diverse_mean", "uniform_mean", "welch_p"])
     return counts
 
 

@@ -27,8 +27,14 @@ import numpy as np
 
 from .. import analysis as A  # noqa: E402
 from .. import results as R  # noqa: E402
+from ..reader import labelled  # noqa: E402
+from ..reader import open as open_labelled  # noqa: E402
 
 NAME = "table_s1.md"
+TABLE = "analysis/familiarity/table"
+TABLE_DIMS = ("novel_env", "cell_class", "table_column")
+CLASSES = ("both", "train_only", "novel_only")  # the table's cell classes, in the order of A.COUNT_NAMES
+COLUMNS = ("diverse_mean", "uniform_mean", "welch_p")
 
 
 def _n(x) -> str:
@@ -65,12 +71,27 @@ def consistency(fam: A.Familiarity):
     return out
 
 
+def labelled_numbers(path, fam: A.Familiarity):
+    """(the table, dims TABLE_DIMS: the run file's familiarity/table, else recomputed from the counts; the states
+    per fit {type: (novel_env, replicate, source)}), both cut to the environments done, as the labelled reader
+    gives them"""
+    with open_labelled(path) as run:
+        ns = {t: labelled(run, f"analysis/familiarity/{t}/n_states", ("novel_env", "replicate", "source"))
+              for t in (A.DIVERSE, A.UNIFORM)}
+        tab = labelled(run, TABLE, TABLE_DIMS) if fam.table is not None else None
+    if tab is None:
+        import xarray
+        tab = xarray.DataArray(fam.recomputed_table(), dims=TABLE_DIMS, coords={
+            "novel_env": fam.envs, "cell_class": list(CLASSES), "table_column": list(COLUMNS)})
+    return tab.sel(novel_env=fam.envs).astype(float), {t: a.sel(novel_env=fam.envs) for t, a in ns.items()}
+
+
 def render(path) -> tuple:
     """(Markdown text, rows) where rows are (env, table (3 × 3), n_states means {type: (train, novel)})"""
     meta = R.load_meta(path)
     an = A.load_analysis(path, need=("familiarity",))
     fam = an.familiarity
-    tab = fam.best_table()
+    tab, n_states = labelled_numbers(path, fam)
     notes = consistency(fam)
     lines = ["# Table S1 — familiarity of the connectors' hidden states in the novel environments", "",
              f"{R.run_title(meta)}; analysis stage {an.status}; {len(fam.envs)} of {len(an.novel_environments)} novel "
@@ -83,26 +104,30 @@ def render(path) -> tuple:
     lines += ["| " + " | ".join(hdr) + " |", "|---|" + "---:|" * (len(hdr) - 2) + "---|"]
     rows = []
     n_div = n_div_sig = n_uni_novel = 0
-    for e, env in enumerate(fam.envs):
+    for env in fam.envs:
+        row = tab.sel(novel_env=env)
         cells = [env.replace("_", " ")]
-        for k in range(3):
-            d, u, p = tab[e, k]
+        for k in CLASSES:
+            d, u, p = (row.sel(cell_class=k, table_column=c).item() for c in COLUMNS)
             cells += [*_pair(d, u), _p(p)]
         ns = {}
         for t in (A.DIVERSE, A.UNIFORM):
-            m = np.nanmean(fam.n_states[t][e].astype(float), axis=0)
-            ns[t] = (float(m[0]), float(m[1]))
-            cells.append(f"{m[0]:g} + {m[1]:g}")
-        d, u, p = tab[e, 0]
+            m = n_states[t].sel(novel_env=env).astype(float).reduce(np.nanmean, "replicate")
+            train, novel = (m.sel(source=s).item() for s in ("training", "novel"))
+            ns[t] = (train, novel)
+            cells.append(f"{train:g} + {novel:g}")
+        both = row.sel(cell_class="both")
+        d, u, p = (both.sel(table_column=c).item() for c in COLUMNS)
         more = "diverse" if d > u else "uniform" if u > d else "—"
         if more == "diverse":
             n_div += 1
             n_div_sig += int(np.isfinite(p) and p < 0.05)
-        if tab[e, 2, 1] > tab[e, 2, 0]:
+        novel_only = row.sel(cell_class="novel_only")
+        if novel_only.sel(table_column="uniform_mean") > novel_only.sel(table_column="diverse_mean"):
             n_uni_novel += 1
         cells.append(more)
         lines.append("| " + " | ".join(cells) + " |")
-        rows.append((env, tab[e], ns))
+        rows.append((env, row.values, ns))
     E = len(fam.envs)
     lines += ["",
               f"The novel environment is more familiar to the diverse-trained connector (more states in cells shared "
