@@ -13,12 +13,18 @@ Two ways in, over the same checked file (root attribute format = "divcoll-run", 
         run["deploy/hidden/weak_diverse@diverse/states"]
         print(run.deploy)                               # what the group holds, with each dataset's doc
 
-- **raw** (numpy, what the figures, pages and tables compute with): `open_file(RUN.h5)` is the checked h5py file
-  for a `with` block; `dataset(f, path, name, shape, axes)` reads one dataset as numpy, refusing it when its
-  shape or (where the file names them) its axes are not the expected ones; `list_attr` reads a list attribute
+  `labelled(run, name, dims)` reads one dataset that way, refusing it unless its dimensions are `dims`. The pages
+  that pick cells by environment, type, replicate or pair read through it: Fig. 2 and the deploy numbers of
+  Figs. 4, S2 and S3 (results.load_deploy), the report's Fig. 2A per environment and its episode links
+  (report_episodes.py), and Table S1.
+
+- **raw** (numpy, what the other figures, pages and tables compute with): `open_file(RUN.h5)` is the checked
+  h5py file for a `with` block; `dataset(f, path, name, shape, axes)` reads one dataset as numpy, refusing it when
+  its shape or (where the file names them) its axes are not the expected ones; `list_attr` reads a list attribute
   (`environments`, `types`, ...: comma-joined strings as every stage writes them, or HDF5 string arrays);
-  `stage_status`, `complete`, `require_stage` and `envs_done` say what a stage holds; `text` decodes an
-  attribute. `STAGES` is the pipeline's stage list, read from its one home, src/config/pipeline.hpp.
+  `stage_status`, `complete`, `require_stage` and `envs_done` say what a stage holds (these and `list_attr` take
+  a file or group of either reader); `text` decodes an attribute. `STAGES` is the pipeline's stage list, read
+  from its one home, src/config/pipeline.hpp.
 
 Every dataset of a run file carries the attributes the run-file schema gives it (src/io/run_file.cpp,
 mpi/README.md "Run-file layout"): `axes` (its dimension names, comma separated), `unit`, `doc` and, for each
