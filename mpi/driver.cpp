@@ -256,7 +256,7 @@ class Writes {
 // the master's progress lines: during a farm every run.progress_every_s, and a line for each round it ends
 class Progress {
  public:
-  Progress(const io::RunConfig& cfg, const Plan::Info& info, int rounds) : cfg_(cfg), info_(info), R_(rounds) {}
+  Progress(const config::RunConfig& cfg, const Plan::Info& info, int rounds) : cfg_(cfg), info_(info), R_(rounds) {}
   void farming(const FarmHead& call, int k, int n) {
     const double now = since(t_stage_);
     if (cfg_.run.progress_every_s <= 0 || now - last_print_ < cfg_.run.progress_every_s) return;
@@ -279,7 +279,7 @@ class Progress {
   }
 
  private:
-  const io::RunConfig& cfg_;
+  const config::RunConfig& cfg_;
   const Plan::Info& info_;
   const int R_;
   const std::chrono::steady_clock::time_point t_stage_ = std::chrono::steady_clock::now();
@@ -297,7 +297,7 @@ void farm_call(MPI_Comm comm, Plan& plan, Schedule& schedule, FarmCall& call, Pr
 
 }  // namespace
 
-void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+void drive(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
@@ -365,7 +365,7 @@ bool run_with_status(io::h5::File& file, const std::string& group, const std::fu
   return true;
 }
 
-MpiDriver::MpiDriver(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint)
+MpiDriver::MpiDriver(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint)
     : comm_(comm), cfg_(cfg), file_(file), checkpoint_(checkpoint) {
   MPI_Comm_rank(comm, &rank_);
 }

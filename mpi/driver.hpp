@@ -45,7 +45,7 @@ using stages::StoredState;
 // runs (or resumes) `plan` on `comm` until its rounds are done; every rank calls it with its own plan
 // object (built from the same inputs). `checkpoint` is called (collectively) at each commit: after every
 // output.checkpoint_every rounds and after the last one.
-void drive(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Plan& plan,
+void drive(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, Plan& plan,
            const std::function<void()>& checkpoint);
 
 // this rank's running totals over every drive() call, in wall seconds, of its time outside farm() (the time
@@ -89,8 +89,8 @@ void write_records(MPI_Comm comm, const io::h5::Node& file, const Records& recor
 // run_with_status() above
 class MpiDriver final : public stages::Driver {
  public:
-  MpiDriver(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint);
-  const io::RunConfig& config() const override { return cfg_; }
+  MpiDriver(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint);
+  const config::RunConfig& config() const override { return cfg_; }
   io::h5::File& file() const override { return file_; }
   bool master() const override { return rank_ == 0; }
   void drive(Plan& plan) override;
@@ -100,22 +100,22 @@ class MpiDriver final : public stages::Driver {
 
  private:
   MPI_Comm comm_;
-  const io::RunConfig& cfg_;
+  const config::RunConfig& cfg_;
   io::h5::File& file_;
   const std::function<void()>& checkpoint_;
   int rank_ = 0;
 };
 
 // a stage's runner (stages/driver.hpp: run_<name>_stage) on `comm`, with an MpiDriver (every rank calls it)
-using StageRunner = void (*)(MPI_Comm, const io::RunConfig&, io::h5::File&, const std::function<void()>&);
+using StageRunner = void (*)(MPI_Comm, const config::RunConfig&, io::h5::File&, const std::function<void()>&);
 template <void (*run)(stages::Driver&)>
-void run_stage(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint) {
+void run_stage(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, const std::function<void()>& checkpoint) {
   MpiDriver driver(comm, cfg, file, checkpoint);
   run(driver);
 }
 
 struct Stage {
-  io::StageInfo info;
+  config::StageInfo info;
   StageRunner run;
 };
 // the stages in the order they run

@@ -74,7 +74,7 @@ void record_stage_times(MPI_Comm comm, io::h5::File& file, const std::string& na
 
 }  // namespace
 
-void run_stages(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Checkpointer& checkpoints, bool agents_only) {
+void run_stages(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, Checkpointer& checkpoints, bool agents_only) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   // the stages call ckpt at each commit; it copies the run file to its checkpoint when
@@ -82,7 +82,7 @@ void run_stages(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Che
   auto ckpt = [&] { checkpoints.commit(); };
   for (const Stage& stage : kStages) {
     const std::string name(stage.info.name);
-    if (agents_only ? name != "agents" : !io::stage_enabled(cfg, name)) continue;
+    if (agents_only ? name != "agents" : !config::stage_enabled(cfg, name)) continue;
     if (complete(file, name)) {
       if (rank == 0) std::printf("stage %s: complete in the run file\n", name.c_str());
       continue;

@@ -16,6 +16,6 @@ namespace divcoll::mpi {
 // every stage of the run (`agents_only`, divcoll evolve: the agents stage) not complete in `file`, each with its
 // timings; the stages commit through `checkpoints`, a stage's end forces a copy. A stop asked for by a signal leaves
 // by StopRequested (mpi/stop.hpp) right after a checkpoint. Collective
-void run_stages(MPI_Comm comm, const io::RunConfig& cfg, io::h5::File& file, Checkpointer& checkpoints, bool agents_only);
+void run_stages(MPI_Comm comm, const config::RunConfig& cfg, io::h5::File& file, Checkpointer& checkpoints, bool agents_only);
 
 }  // namespace divcoll::mpi
