@@ -22,7 +22,7 @@ import dataclasses
 import os
 import sys
 import tomllib
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -510,6 +510,48 @@ def reference_lines(pops: Sequence[V.Population]) -> List[str]:
     return lines
 
 
+def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]], B: int = 4000) -> List[str]:
+    """markdown: environment by environment, the weak matched pairs' travel minus that of their agents alone (3000
+    steps), mean over populations with a hierarchical-bootstrap 95% interval and the populations in which the pair
+    went further; one pair of columns per training. Exploratory: no registered claim, no multiplicity control."""
+    have = [(name, pops) for name, pops in trainings if pops]
+    if not have:
+        return []
+    p0 = have[0][1][0]
+    pairs = [(V.WU, "weak uniform on clones"), (V.WD, "weak diverse on diverse pairs")]
+    alone = {e: float(np.mean([p.alone()[i] for p in have[0][1]])) for i, e in enumerate(p0.envs)}
+    envs = sorted(p0.envs, key=lambda e: -alone[e])
+    head = " | ".join(f"{name}: {label}" for name, pops in have for _, label in pairs)
+    lines = ["", "## Pairs against their agents alone, environment by environment (exploratory)", "",
+             "The registered claims compare collectives with agents alone on flat (C07, C08) and over the novel "
+             "environments (C11, C16). Environment by environment, a weak connector's pair travels less than its two "
+             "agents alone wherever those walk well, and further wherever they stall. Travel of the pair minus that "
+             "of its agents alone, BL over 3000 steps: mean over populations [hierarchical-bootstrap 95% interval] "
+             "(populations in which the pair went further / populations). Not a registered claim: read it as a "
+             "pattern, not as 26 tests. Environments in order of the agents' travel alone (paper-faithful "
+             "populations).", "",
+             f"| environment | agents alone | {head} |", "|---" * (2 + len(have) * len(pairs)) + "|"]
+    for e in envs:
+        cells = []
+        for _, pops in have:
+            ei = pops[0].envs.index(e)
+            for t, _ in pairs:
+                ti = pops[0].types.index(t)
+
+                def fn(p, d, protocol, ei=ei, ti=ti):
+                    return p.T(d)[:, ei, ti] - p.alone(protocol)[ei]
+
+                if len(pops) >= 3:
+                    m, lo, hi, point = _mean_ci(pops, fn, B=B)
+                    ci = f" [{lo:+.2f}, {hi:+.2f}]"
+                else:
+                    point = np.array([float(fn(p, None, "same_length")[0]) for p in pops])
+                    m, ci = float(np.mean(point)), ""
+                cells.append(f"{m:+.2f}{ci} ({int(np.sum(point > 0))}/{len(pops)})")
+        lines.append(f"| {e} | {alone[e]:.2f} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: bool = False) -> str:
     """the page DIR/verdicts.md with its figures; with readme, also that README's results table (readme_lines),
     from the same judging; with html, also DIR/verdicts.html (write_html)"""
@@ -586,6 +628,7 @@ def write(folder: str, out: str, B: int = V.B_DEFAULT, readme: str = "", html: b
             cells += [f"{m:.2f} [{lo:.2f}, {hi:.2f}]", ratio]
         lines.append(f"| {lab} | " + " | ".join(cells) + " |")
     lines += reference_lines(main)
+    lines += pairs_vs_alone_lines([("paper-faithful", main)] + ([("best-effort", jb.main)] if jb else []))
     rows3 = fig3a(main, os.path.join(fig_dir, "fig3a.png"))
     lines += ["", "## Fig. 3A", "", "![Fig. 3A](figures/fig3a.png)", "",
               "| type | agents | mean DTW per step, u [95% interval] |", "|---|---|---|"]

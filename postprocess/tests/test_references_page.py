@@ -69,6 +69,33 @@ class References(unittest.TestCase):
         self.assertIn("No reference connectors for these populations", text)
 
 
+class PairsAgainstAlone(unittest.TestCase):
+    def test_each_environment_shows_the_pairs_difference_from_agents_alone(self):
+        rng = np.random.Generator(np.random.PCG64(4))
+        runs = {s: synthetic(s, rng) for s in range(1, 5)}
+        pops = []
+        for s, a in runs.items():
+            alone = np.asarray(a["deploy"]["alone_bl"], float)
+            coll = np.asarray(a["deploy"]["collectives_bl"], float)
+            # the matched weak pairs travel 2 BL less than alone on flat, 0.5 BL more in the last environment,
+            # except in population 4, where they travel 0.5 BL less there
+            for t in (V.WU, V.WD):
+                ti = a["deploy"]["types"].index(t)
+                coll[0, ti, :] = alone[0] - 2.0
+                coll[-1, ti, :] = alone[-1] + (0.5 if s < 4 else -0.5)
+            a["deploy"]["collectives_bl"] = coll.tolist()
+            pops.append(V.Population(s, [a]))
+        lines = verdict_page.pairs_vs_alone_lines([("paper-faithful", pops), ("best-effort", pops[:2])], B=300)
+        rows = {r[0]: r for r in md_table("\n".join(lines), "| environment | agents alone |")}
+        self.assertEqual(set(rows), set(ENVS))
+        flat, last = rows["flat"], rows[ENVS[-1]]
+        self.assertTrue(flat[2].startswith("-2.00 [-2.00, -2.00] (0/4)"), flat)
+        self.assertTrue(last[2].startswith("+0.25 ["), last)
+        self.assertTrue(last[2].endswith("(3/4)"), last)
+        self.assertEqual(last[4], "+0.50 (2/2)")  # two populations: no interval
+        self.assertEqual(verdict_page.pairs_vs_alone_lines([("paper-faithful", [])]), [])
+
+
 class AmendmentStatistics(unittest.TestCase):
     def test_c24b_is_the_log_ratio_of_exclusive_states(self):
         rng = np.random.Generator(np.random.PCG64(5))
