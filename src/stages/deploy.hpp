@@ -3,20 +3,13 @@
 // environment of deploy.environments, without learning. One round of the task farm per environment,
 // a checkpoint after each.
 //
-// Run file (group /deploy; attributes status, environments, types, references, envs_done):
-//   diverse_pairs            (pairs × 2)            the fixed list of diverse deployment pairs
-//   agents/travel_bl, travel_u, status              (E × population)
-//   agents/travel_bl_early, collectives/travel_bl_early  the same at deploy.early_step (only when > 0; NaN unless ok)
-//   collectives/travel_bl, travel_u, status         (E × types × replicates × pairs)
-//   references/travel_bl, travel_u, status, travel_bl_early  (E × 2·3 × pairs)  with deploy.references: the reference
-//                            connectors free, passive, follower (src/collective/references.hpp), each on uniform and on
-//                            diverse pairs (attribute references), items after the trained types'
-//   hidden/<type>/states     (E × replicates × pairs × K × 32, float32)  connector hidden states (SPEC §8.2)
-//   hidden/<type>/index      (E × replicates × pairs × K)  which: step · 5 + connector spring
-//     for the weak connectors deployed as trained (weak_uniform@uniform, weak_diverse@diverse); K =
-//     ceil(deploy.hidden_subsample / pairs) states per episode, drawn from the episode's own stream
-//     (seed, 3001, item), so at most hidden_subsample per (type, replicate, environment); NaN if not ok
-// status: 0 ok, 1 nan, 2 unstable; travel is NaN unless ok, and no summary averages over NaN.
+// Run file: group /deploy, every dataset with its shape, unit and doc in the run-file schema (src/io/run_file.cpp;
+// `divcoll schema`, mpi/README.md "Run-file layout"). The references rows (deploy.references) are the reference
+// connectors of src/collective/references.hpp, each on uniform and on diverse pairs, as items after the trained
+// types'. The hidden states are kept for the weak connectors deployed as trained (weak_uniform@uniform,
+// weak_diverse@diverse): K = ceil(deploy.hidden_subsample / pairs) states per episode, drawn from the episode's own
+// stream (seed, 3001, item), so at most hidden_subsample per (type, replicate, environment). Travel is NaN unless
+// the episode's status is ok, and no summary averages over NaN.
 #pragma once
 
 #include <cstdint>
