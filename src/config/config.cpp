@@ -267,6 +267,15 @@ const std::vector<Key>& schema() {
             "truncated backpropagation: the gradient of the per-window displacements, each window's start "
             "state held fixed (0 = the whole episode)",
             DIVCOLL_FIELD(connectors.bptt_window)),
+        num("connectors", "horizon_start", T::Int, "0", "[0, 1e7]", "steps",
+            "horizon curriculum: the training episode's length at the first iteration, growing linearly to "
+            "episode_steps over horizon_ramp iterations (0 = every iteration at episode_steps); keep-best's "
+            "validation always runs episode_steps",
+            DIVCOLL_FIELD(connectors.horizon_start)),
+        num("connectors", "horizon_ramp", T::Int, "0", "[0, 1e6]", "iterations",
+            "horizon curriculum: iterations over which the training episode grows from horizon_start to "
+            "episode_steps (0 = it stays at horizon_start)",
+            DIVCOLL_FIELD(connectors.horizon_ramp)),
         num("connectors", "grad_samples", T::Int, "1", "[1, 1000]", "",
             "gradients averaged per step (Gaussian smoothing): 1 = the gradient at the weights; more = at the "
             "weights ± antithetic N(0, grad_sigma²) perturbations, same batch",
@@ -950,6 +959,10 @@ void validate(const RunConfig& cfg) {
       listed(c.deploy.environments, "flat"),
       "deploy.environments must list flat, the training environment every experiment compares "
       "against");
+  DIVCOLL_THROW_UNLESS(c.connectors.horizon_start <= c.connectors.episode_steps,
+                       "connectors.horizon_start (" + std::to_string(c.connectors.horizon_start) +
+                           ") must not exceed connectors.episode_steps (" +
+                           std::to_string(c.connectors.episode_steps) + ")");
   check_combinations(c);
 }
 

@@ -72,6 +72,8 @@ struct RunConfig {
     std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)
     double lr_final{};               // the rate at the last iteration as a fraction of lr (decaying schedules)
     int bptt_window{};               // truncated backpropagation window, steps (0 = the whole episode)
+    int horizon_start{};             // horizon curriculum: training episode steps at the first iteration (0 = none)
+    int horizon_ramp{};              // iterations over which the training episode grows to episode_steps
     int grad_samples{};              // gradients averaged per step, at weights perturbed by N(0, grad_sigma²)
     double grad_sigma{};             // sd of those perturbations
     bool keep_best{};                // return the weights best on a fixed validation batch

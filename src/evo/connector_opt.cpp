@@ -27,7 +27,13 @@ struct ConnectorOptimizer::Es {
 
 bool extended(const OptSettings& s) {
   return s.optimizer == "cmaes" || s.optimizer == "es" || s.lr_schedule != "constant" || s.bptt_window > 0 || s.grad_samples > 1 ||
-         s.keep_best;
+         s.keep_best || s.horizon_start > 0;
+}
+
+int training_steps(const OptSettings& s, int episode_steps, int it) {
+  if (s.horizon_start <= 0) return episode_steps;
+  if (s.horizon_ramp <= 0 || it >= s.horizon_ramp) return s.horizon_ramp <= 0 ? s.horizon_start : episode_steps;
+  return s.horizon_start + static_cast<int>(static_cast<int64_t>(episode_steps - s.horizon_start) * it / s.horizon_ramp);
 }
 
 double scheduled_lr(const OptSettings& s, int it, int iterations) {
@@ -306,8 +312,8 @@ PlainTrainResult train_plain(sim::Simulator& sim, const std::vector<morph::Agent
     }
     std::vector<ProbeResult> rs;
     for (const Probe& p : opt.ask(it)) {
-      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.physics, spec.episode_steps, s.bptt_window,
-                             pair_clip(s)));
+      rs.push_back(run_probe(sim, agents, batch, p.weights, p.grad, spec.tether, spec.physics,
+                             training_steps(s, spec.episode_steps, it), s.bptt_window, pair_clip(s)));
       (p.grad ? out.pair_episodes_grad : out.pair_episodes_fwd) += static_cast<long>(batch.size());
     }
     const double v = validate();

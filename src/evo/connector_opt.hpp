@@ -44,6 +44,8 @@ struct OptSettings {
   std::string lr_schedule;  // constant | cosine | exponential
   double lr_final{};        // fraction of lr at the last iteration
   int bptt_window{};        // steps, 0 = full backpropagation
+  int horizon_start{};      // horizon curriculum: training steps at the first iteration, 0 = none
+  int horizon_ramp{};       // iterations to grow to the full episode
   int grad_samples{};       // gradients averaged per step
   double grad_sigma{};      // sd of their weight perturbations
   bool keep_best{};         // return the validation-best weights
@@ -52,8 +54,8 @@ struct OptSettings {
   std::string clip;         // global | per_pair: clip_norm clips the batch mean or each pair's gradient
 };
 inline OptSettings opt_settings(const config::RunConfig::Connectors& c) {
-  return {c.optimizer,    c.lr,          c.clip_norm, c.lr_schedule, c.lr_final,  c.bptt_window,
-          c.grad_samples, c.grad_sigma,  c.keep_best, c.es_popsize,  c.es_sigma, c.clip};
+  return {c.optimizer,     c.lr,           c.clip_norm,    c.lr_schedule, c.lr_final,   c.bptt_window, c.horizon_start,
+          c.horizon_ramp,  c.grad_samples, c.grad_sigma,   c.keep_best,   c.es_popsize, c.es_sigma,    c.clip};
 }
 // the norm each pair's gradient is scaled down to before the batch sum: clip_norm with clip = per_pair, else 0
 // (no per-pair clipping; ProbeSum::pair_clip)
@@ -63,6 +65,9 @@ bool extended(const OptSettings& s);
 
 // the learning rate of iteration it (0-based) of `iterations`: lr at it = 0, lr·lr_final at the last iteration
 double scheduled_lr(const OptSettings& s, int it, int iterations);
+// the training episode's steps at iteration `it` (0-based) of the horizon curriculum: horizon_start growing linearly
+// to episode_steps over horizon_ramp iterations (rounded down), episode_steps without a curriculum
+int training_steps(const OptSettings& s, int episode_steps, int it);
 
 // every value finite (a gradient fit to step with)
 inline bool all_finite(const std::vector<double>& v) {

@@ -36,10 +36,11 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// one pair episode of one weight vector (the plain plan: weight vector = slot)
+// one pair episode of one weight vector (the plain plan: weight vector = slot), `steps` long
 struct PairTask {
   int32_t weights = 0, slot = 0, a = 0, b = 0;
   uint8_t grad = 1;
+  int32_t steps = 0;
 };
 struct PairDone {
   double travel_u = 0, travel_bl = 0;
@@ -49,7 +50,7 @@ struct PairDone {
 };
 template <class Ar>
 void serialize(Ar& ar, PairTask& t, unsigned) {
-  ar & t.weights & t.slot & t.a & t.b & t.grad;
+  ar & t.weights & t.slot & t.a & t.b & t.grad & t.steps;
 }
 template <class Ar>
 void serialize(Ar& ar, PairDone& d, unsigned) {
@@ -197,7 +198,7 @@ class PlainConnectorsPlan final : public LockstepPlan {
   std::vector<std::string> items(int it) override {
     std::vector<std::string> items;
     for (int c = 0; c < slot_count_; ++c)
-      for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1}));
+      for (const auto& [a, b] : batch(c, it)) items.push_back(pack(PairTask{c, c, a, b, 1, spec_.episode_steps}));
     curve_u_.assign(slot_count_, kNaN), curve_bl_.assign(slot_count_, kNaN), nan_pairs_.assign(slot_count_, 0);
     evo::ProbeSum empty;
     empty.pair_clip = evo::pair_clip(evo::opt_settings(def_.connectors));  // connectors.clip
@@ -205,11 +206,12 @@ class PlainConnectorsPlan final : public LockstepPlan {
     return items;
   }
   std::string compute(const std::string& item) override {
+    const PairTask t = unpack<PairTask>(item);
     sim::RunOptions ro = def_.physics.options();
-    ro.steps = spec_.episode_steps;
+    ro.steps = t.steps;
     ro.grad = true;
     ro.agent_param_grad = false;  // the agents stay frozen
-    return pack(episode(unpack<PairTask>(item), ro));
+    return pack(episode(t, ro));
   }
   void reduce(int, int64_t i, const std::string& bytes) override {
     // in pair order; a pair not ok or with a non-finite gradient is counted
@@ -322,14 +324,15 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
         const auto pairs = batch(c, it);
         for (const evo::Probe& p : opt_[c].ask(it)) {
           w.insert(w.end(), p.weights.begin(), p.weights.end());
-          for (const auto& [a, b] : pairs) items_.push_back(pack(PairTask{nw, c, a, b, p.grad}));
+          const int steps = evo::training_steps(os_, spec_.episode_steps, it);  // connectors.horizon_start
+          for (const auto& [a, b] : pairs) items_.push_back(pack(PairTask{nw, c, a, b, p.grad, steps}));
           counts_[c].push_back(static_cast<int>(pairs.size()));
           ++nw;
         }
       }
       if (os_.keep_best) {
         w.insert(w.end(), opt_[c].current().begin(), opt_[c].current().end());
-        for (const auto& [a, b] : val_[c]) items_.push_back(pack(PairTask{nw, c, a, b, 0}));
+        for (const auto& [a, b] : val_[c]) items_.push_back(pack(PairTask{nw, c, a, b, 0, spec_.episode_steps}));
         counts_[c].push_back(static_cast<int>(val_[c].size()));
         ++nw;
       }
@@ -341,7 +344,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   std::string compute(const std::string& item) override {
     const PairTask t = unpack<PairTask>(item);
     sim::RunOptions ro = def_.physics.options();
-    ro.steps = spec_.episode_steps;
+    ro.steps = t.steps;
     ro.grad = t.grad != 0;
     ro.agent_param_grad = false;  // the agents stay frozen
     ro.grad_window = os_.bptt_window;

@@ -183,6 +183,8 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.lr_schedule",
                                              "connectors.lr_final",
                                              "connectors.bptt_window",
+                                             "connectors.horizon_start",
+                                             "connectors.horizon_ramp",
                                              "connectors.grad_samples",
                                              "connectors.grad_sigma",
                                              "connectors.keep_best",
@@ -369,6 +371,12 @@ TEST(ConfigErrors, ImpossibleCombinationsNameBothKeys) {
       HasSubstr("agents.generations"));
   // specialists and scaling run in novel environments
   EXPECT_THAT(refusal("[deploy]\nenvironments = [\"flat\"]\n"), HasSubstr("run.stages has specialists"));
+}
+
+TEST(ConfigErrors, AHorizonLongerThanTheEpisodeIsRefused) {
+  EXPECT_THAT(refusal("[connectors]\nepisode_steps = 200\nhorizon_start = 300\n"),
+              HasSubstr("connectors.horizon_start (300) must not exceed connectors.episode_steps (200)"));
+  EXPECT_NO_THROW(parse_config("[connectors]\nepisode_steps = 200\nhorizon_start = 200\n", "test.toml"));
 }
 
 TEST(ConfigErrors, MalformedTomlNamesTheFile) {

@@ -148,6 +148,27 @@ TEST(ConnectorOpt, DecayingRateFollowsItsSchedule) {
   }
 }
 
+TEST(ConnectorOpt, TheHorizonCurriculumGrowsTheTrainingEpisodeToItsFullLength) {
+  OptSettings s = evo::opt_settings(config::default_config().connectors);
+  for (int it : {0, 7, 99}) EXPECT_EQ(evo::training_steps(s, 1000, it), 1000);  // the default: no curriculum
+  EXPECT_FALSE(evo::extended(s));
+  s.horizon_start = 100;
+  s.horizon_ramp = 50;
+  EXPECT_TRUE(evo::extended(s));
+  EXPECT_EQ(evo::training_steps(s, 1000, 0), 100);
+  EXPECT_EQ(evo::training_steps(s, 1000, 1), 118);  // 100 + 900·1/50
+  EXPECT_EQ(evo::training_steps(s, 1000, 25), 550);
+  EXPECT_EQ(evo::training_steps(s, 1000, 49), 982);
+  for (int it : {50, 51, 99}) EXPECT_EQ(evo::training_steps(s, 1000, it), 1000);
+  int last = 0;
+  for (int it = 0; it < 60; ++it) {  // never shrinks
+    EXPECT_GE(evo::training_steps(s, 1000, it), last);
+    last = evo::training_steps(s, 1000, it);
+  }
+  s.horizon_ramp = 0;  // a short horizon throughout
+  for (int it : {0, 50, 99}) EXPECT_EQ(evo::training_steps(s, 1000, it), 100);
+}
+
 TEST(ConnectorOpt, KeepBestReturnsTheValidationBestWeights) {
   OptSettings s = evo::opt_settings(config::default_config().connectors);
   s.keep_best = true;

@@ -5,6 +5,8 @@
 
 #include "collective/deploy_variants.hpp"
 #include "collective/pairs.hpp"
+#include "collective/references.hpp"
+#include "config/pipeline.hpp"
 #include "evo/connector_opt.hpp"
 #include "morph/body.hpp"
 #include "stages/stage_testing.hpp"
@@ -120,6 +122,38 @@ TEST(ConnectorsPlan, TheExtendedPlanKeepsTheBestWeightsAndResumesToTheSameRun) {
   for (int cut = 1; cut < 3; ++cut) test::expect_same(test::resumed([&] { return c.plan(); }, cut), want);
 }
 
+
+TEST(ConnectorsPlan, AHorizonCurriculumTrainsOnShorterEpisodesAndValidatesOnTheFullOne) {
+  const std::vector<std::string> extended = {"connectors.keep_best=true", "connectors.validation_pairs=2"};
+  const test::Datasets want = test::written(run_serial(*Case(extended).plan()));
+  // a curriculum that starts at the full length is no curriculum: the same run, bit for bit
+  std::vector<std::string> full = extended;
+  full.insert(full.end(), {"connectors.horizon_start=60", "connectors.horizon_ramp=2"});
+  test::expect_same(test::written(run_serial(*Case(full).plan())), want);
+  // from 20 steps: the first iteration's batch runs 20-step episodes (its curve is theirs), the validation 60
+  std::vector<std::string> ramp = extended;
+  ramp.insert(ramp.end(), {"connectors.horizon_start=20", "connectors.horizon_ramp=2"});
+  const Case c(ramp);
+  const test::Datasets d = test::written(run_serial(*c.plan()));
+  sim::Simulator sim;
+  sim::RunOptions ro;
+  ro.grad = true;
+  ro.agent_param_grad = false;
+  const ConnectorSlot& slot = c.slots[0];  // weak_uniform, replicate 0: the clone pairs of agents 0, 1, 2
+  Rng init = make_rng(c.cfg.run.seed, slot.stream, config::kItemInitialWeights);
+  const std::vector<double> w = collective::initial_connector_params(c.cfg.connectors, slot.tether.amplitude, init);
+  double at[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    ro.steps = k == 0 ? 20 : 60;
+    evo::ProbeSum sum;
+    for (const auto& [a, b] : collective::uniform_pairs(c.spec.batch_pairs))
+      sum.add(collective::run_pair(sim, c.agents[a], c.agents[b], w, slot.tether, "flat", sim::ContactLaw::coulomb, ro, nullptr));
+    at[k] = sum.mean().travel_u;
+  }
+  EXPECT_EQ(test::at(d, slot.group + "/curve_u").values[slot.column], at[0]);
+  EXPECT_NE(at[0], at[1]);
+  EXPECT_NE(test::at(d, slot.group + "/curve_u").values, test::at(want, slot.group + "/curve_u").values);
+}
 
 TEST(ConnectorsPlan, TheDriverAndTheSerialFarmMakeTheSameFarmCalls) {
   // the plain plan, the extended one (keep-best: a closing round) and the evolution strategy
