@@ -3,7 +3,8 @@
 #   bash jobs/install-deps.sh [--test] [--log FILE]
 # Without --test: the build and runtime packages (README command 1, jobs/quickstart.sh). With --test also what
 # only the tests use (README command 2, jobs/test.sh): a private Slurm with munge, shellcheck, chromium,
-# gdb (the job-script checks print every rank's stack if a run hangs).
+# gdb (the job-script checks print every rank's stack if a run hangs), pip and venv (the offline
+# `pip install ./postprocess` of the run-file readers).
 # apt's output goes to FILE when given (default: the terminal).
 set -euo pipefail
 
@@ -15,10 +16,10 @@ BUILD_RUNTIME=(
   libgtest-dev
   libtomlplusplus-dev libcli11-dev
   python3-h5py python3-numpy python3-matplotlib python3-scipy python3-xarray
-  python3-pip python3-venv python3-setuptools
   ffmpeg
 )
 TEST_ONLY=(
+  python3-pip python3-venv python3-setuptools
   shellcheck slurmctld slurmd slurm-client munge
   chromium
   gdb
