@@ -2,7 +2,8 @@
 # README command 1: install what is missing (build and runtime packages only), build, run the pipeline at the
 # quick preset on every core, write its report (report.md, report.html, figures, the movie of a uniform and a
 # diverse pair) and the demo. The Supplementary Movie is one command more (it doubles the report's time):
-#   build/divcoll report out/quick.h5 --out out/report --movie One line per step; the long outputs go to out/logs/. Rerunning starts the quick run over.
+#   build/divcoll report out/quick.h5 --out out/report --movie
+# One line per step; the long outputs go to out/logs/. Rerunning starts the quick run over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mkdir -p out/logs

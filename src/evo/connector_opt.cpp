@@ -32,7 +32,8 @@ bool extended(const OptSettings& s) {
 
 int training_steps(const OptSettings& s, int episode_steps, int it) {
   if (s.horizon_start <= 0) return episode_steps;
-  if (s.horizon_ramp <= 0 || it >= s.horizon_ramp) return s.horizon_ramp <= 0 ? s.horizon_start : episode_steps;
+  if (s.horizon_ramp <= 0) return s.horizon_start;
+  if (it >= s.horizon_ramp) return episode_steps;
   return s.horizon_start + static_cast<int>(static_cast<int64_t>(episode_steps - s.horizon_start) * it / s.horizon_ramp);
 }
 

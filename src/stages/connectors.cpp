@@ -315,6 +315,7 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
   // weights on its validation batch; the closing round (it = I) has the validation alone
   std::string round_input(int it) override {
     const bool closing = it >= iterations_;
+    const int steps = evo::training_steps(os_, spec_.episode_steps, it);  // the probes' (connectors.horizon_start)
     std::vector<double> w;
     items_.clear();
     counts_.assign(slot_count_, {});
@@ -324,7 +325,6 @@ class ExtendedConnectorsPlan final : public LockstepPlan {
         const auto pairs = batch(c, it);
         for (const evo::Probe& p : opt_[c].ask(it)) {
           w.insert(w.end(), p.weights.begin(), p.weights.end());
-          const int steps = evo::training_steps(os_, spec_.episode_steps, it);  // connectors.horizon_start
           for (const auto& [a, b] : pairs) items_.push_back(pack(PairTask{nw, c, a, b, p.grad, steps}));
           counts_[c].push_back(static_cast<int>(pairs.size()));
           ++nw;
