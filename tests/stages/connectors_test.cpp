@@ -70,7 +70,7 @@ TEST(ConnectorsPlan, TheFirstIterationsCurveIsTheMeanOfItsPairEpisodes) {
   ro.agent_param_grad = false;
   for (int s = 0; s < 4; ++s) {
     const ConnectorSlot& slot = c.slots[s];
-    Rng init = make_rng(c.cfg.run.seed, slot.stream, 1000000);
+    Rng init = make_rng(c.cfg.run.seed, slot.stream, config::kItemInitialWeights);
     const std::vector<double> w = morph::init_connector_params(init, c.cfg.connectors.init_out_gain);
     Rng batch = make_rng(c.cfg.run.seed, slot.stream, 0);
     const auto pairs = slot.diverse ? collective::random_pairs(batch, 4, c.spec.batch_pairs)
