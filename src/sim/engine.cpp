@@ -251,6 +251,7 @@ Simulator::Impl::Episode Simulator::Impl::begin(const Scene& sc, const RunOption
     res.v.assign((T + 1) * N2, std::numeric_limits<double>::quiet_NaN());
     res.touch.assign(static_cast<size_t>(T + 1) * N, 0);
   }
+  if (opt.record_tether) res.tether.assign(sc.connector_spring_index.size() * kTetherColumns, 0.0);
   if (opt.record_hidden && m.C > 0) res.hidden.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * e.cols * 32);
   if (opt.record_inputs && m.C > 0)
     res.inputs.reserve(static_cast<size_t>((T + opt.hidden_every - 1) / opt.hidden_every) * e.cols * kConnectorInputs);
@@ -296,6 +297,7 @@ bool Simulator::Impl::forward_step(Episode& e, int t) {
   for (int s = 0; s < n; ++s, ++k) {
     double* vp = opt.grad ? vps.data() + (static_cast<size_t>(k) * N2) : vps.data();
     springs_forward(m, sx(k), sv(k), o, F.data());
+    if (opt.record_tether) tether_accumulate(m, sv(k), res.tether.data());
     velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
     contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
                     opt.grad ? recs.data() + (static_cast<size_t>(k) * N) : nullptr);

@@ -42,6 +42,8 @@ struct RunOptions {
   bool record = false;           // keep x, v, touch at every step for output
   bool record_hidden = false;    // keep the connectors' second hidden layer (32 per connector spring)
   int hidden_every = 1;          // record hidden states every this many steps
+  bool record_tether = false;    // sum, over the episode, each connector spring's impulse and work on its two masses
+                                 // (RunResult::tether): what a tether does to each agent of a collective
   bool record_inputs = false;    // keep the connectors' network inputs (11 per connector spring, SPEC §6.3) at the
                                  // steps where hidden states are recorded (every hidden_every steps)
   double speed_limit = 100.0;    // u/s; a mass faster than this marks the episode unstable
@@ -100,7 +102,19 @@ struct RunResult {
   std::vector<double> hidden;
   // with record_inputs: (n_records x C*5 x 11), the networks' inputs at those steps
   std::vector<double> inputs;
+  // with record_tether: (C*5 x kTetherColumns) per connector spring s = (i, j), in connector then spring order,
+  // summed over every physics substep of the episode (h = Δt / substeps, the spring's force f on i from SPEC §2
+  // step 2 with the substep's starting x, v and o; −f acts on j):
+  //   impulse_x_i, impulse_y_i   Σ f h               (mass·u/s; on j it is the negative)
+  //   work_i, work_j             Σ f·v_i h, Σ −f·v_j h  (mass·u²/s², left Riemann sums of the power)
+  //   force_time                 Σ |f| h             (mass·u/s, the tether's force magnitude integrated over time)
+  std::vector<double> tether;
 };
+
+// the columns of RunResult::tether, in order
+inline constexpr int kTetherColumns = 5;
+inline constexpr const char* kTetherColumnNames[kTetherColumns] = {"impulse_x_i", "impulse_y_i", "work_i", "work_j",
+                                                                   "force_time"};
 
 class Simulator {
  public:

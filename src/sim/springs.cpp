@@ -6,6 +6,7 @@
 // every sum, so the same bits.
 #include <cmath>
 
+#include "sim/engine.hpp"
 #include "sim/stages.hpp"
 
 namespace divcoll::sim {
@@ -67,6 +68,23 @@ void springs_forward(const Model& m, const double* x, const double* v, const dou
     spring_forces<false>(m, x, v, o, fx, fy);
   for (int q = 0; q < 2 * m.N; ++q) F[q] = 0;
   scatter(SpringArrays(m), fx, fy, F);
+}
+
+void tether_accumulate(const Model& m, const double* v, double* tether) {
+  const double* fx = m.spring_scratch.data();
+  const double* fy = fx + m.S;
+  const int32_t* si = m.scene->spring_i.data();
+  const int32_t* sj = m.scene->spring_j.data();
+  const std::vector<int32_t>& springs = m.scene->connector_spring_index;
+  for (size_t c = 0; c < springs.size(); ++c) {
+    const int s = springs[c], i = si[s], j = sj[s];
+    double* row = tether + c * kTetherColumns;
+    row[0] += fx[s] * m.h;
+    row[1] += fy[s] * m.h;
+    row[2] += (fx[s] * v[2 * i] + fy[s] * v[2 * i + 1]) * m.h;
+    row[3] -= (fx[s] * v[2 * j] + fy[s] * v[2 * j + 1]) * m.h;
+    row[4] += std::sqrt(fx[s] * fx[s] + fy[s] * fy[s]) * m.h;
+  }
 }
 
 namespace {

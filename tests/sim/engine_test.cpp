@@ -80,6 +80,85 @@ TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
   EXPECT_GT(max_speed, 1e-3) << "the controllers should move the masses";
 }
 
+// record_tether: with no ground, gravity or damping the agents' own springs cancel inside each agent, so the change of
+// an agent's momentum is exactly the impulse the tether's springs gave it
+TEST(Engine, TetherImpulseIsEachAgentsMomentumChangeWithoutGroundGravityOrDamping) {
+  const morph::Agent a = make_agent(1), b = make_agent(2);
+  sim::Scene s = collective::pair_scene(a, b, make_conn(1), testing::weak_connector(), "flat", testing::kCoulomb);
+  s.env.gravity = 0;
+  s.env.damping = 0;
+  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
+  s.constants.substeps = 4;
+  sim::RunOptions opt;
+  opt.steps = 400;
+  const double travel = sim::simulate(s, opt).travel;
+  opt.record = true;
+  opt.record_tether = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  EXPECT_EQ(r.travel, travel) << "recording changes nothing";
+  const int N = s.n_masses(), T = opt.steps;
+  ASSERT_EQ(r.tether.size(), s.connector_spring_index.size() * sim::kTetherColumns);
+  std::vector<int> owner(N, -1);
+  for (int q = 0; q < s.n_agents(); ++q)
+    for (int k = 0; k < sim::kAgentMasses; ++k) owner[s.agent_mass_index[q * sim::kAgentMasses + k]] = q;
+  for (int q = 0; q < 2; ++q) {
+    double px = 0, py = 0, jx = 0, jy = 0;
+    for (int i = 0; i < N; ++i)
+      if (owner[i] == q) px += s.mass[i] * r.v[(T * N + i) * 2], py += s.mass[i] * r.v[(T * N + i) * 2 + 1];
+    for (size_t c = 0; c < s.connector_spring_index.size(); ++c) {
+      const int sp = s.connector_spring_index[c];
+      const double* row = &r.tether[c * sim::kTetherColumns];
+      if (owner[s.spring_i[sp]] == q) jx += row[0], jy += row[1];
+      if (owner[s.spring_j[sp]] == q) jx -= row[0], jy -= row[1];
+    }
+    EXPECT_GT(std::abs(jx) + std::abs(jy), 1e-3) << "agent " << q << ": the tether should push it";
+    EXPECT_NEAR(jx, px, 1e-9 * (1 + std::abs(px))) << "agent " << q;
+    EXPECT_NEAR(jy, py, 1e-9 * (1 + std::abs(py))) << "agent " << q;
+  }
+}
+
+// record_tether's five sums recomputed from the recorded states for a tether whose network outputs 0 (every weight 0:
+// the springs hold their rest lengths, so f = −k (ℓ − L) d̂ − c ((v_i − v_j)·d̂) d̂ needs only x and v), one substep
+TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndPowerOnEachMass) {
+  const morph::Agent a = make_agent(5), b = make_agent(6);
+  const std::vector<double> zero(sim::connector_param_count(), 0.0);
+  const sim::Scene s = collective::pair_scene(a, b, zero, testing::weak_connector(), "flat", testing::kCoulomb);
+  sim::RunOptions opt;
+  opt.steps = 300;
+  opt.record = true;
+  opt.record_tether = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  ASSERT_EQ(r.substeps, 1);
+  const int N = s.n_masses();
+  const double h = s.constants.dt, eps2 = s.constants.eps_len * s.constants.eps_len;
+  double largest = 0;
+  for (size_t c = 0; c < s.connector_spring_index.size(); ++c) {
+    const int sp = s.connector_spring_index[c], i = s.spring_i[sp], j = s.spring_j[sp];
+    double want[sim::kTetherColumns] = {0, 0, 0, 0, 0};
+    for (int t = 0; t < opt.steps; ++t) {
+      const double* x = &r.x[static_cast<size_t>(t) * N * 2];
+      const double* v = &r.v[static_cast<size_t>(t) * N * 2];
+      const double dx = x[2 * i] - x[2 * j], dy = x[2 * i + 1] - x[2 * j + 1];
+      const double l = std::sqrt(dx * dx + dy * dy + eps2), ux = dx / l, uy = dy / l;
+      const double w = (v[2 * i] - v[2 * j]) * ux + (v[2 * i + 1] - v[2 * j + 1]) * uy;
+      const double mag = -s.stiffness[sp] * (l - s.rest_length[sp]) - s.damping[sp] * w;
+      const double fx = mag * ux, fy = mag * uy;
+      want[0] += fx * h, want[1] += fy * h;
+      want[2] += (fx * v[2 * i] + fy * v[2 * i + 1]) * h;
+      want[3] -= (fx * v[2 * j] + fy * v[2 * j + 1]) * h;
+      want[4] += std::hypot(fx, fy) * h;
+    }
+    for (int k = 0; k < sim::kTetherColumns; ++k) {
+      const double got = r.tether[c * sim::kTetherColumns + k];
+      EXPECT_NEAR(got, want[k], 1e-9 * (1 + std::abs(want[k]))) << "spring " << c << ", " << sim::kTetherColumnNames[k];
+    }
+    largest = std::max(largest, want[4]);
+  }
+  EXPECT_GT(largest, 1e-3) << "the passive tether should pull";
+}
+
 TEST(Engine, DampingRemovesEnergyFromPassiveBody) {
   morph::Agent a = make_agent(3);
   for (double& amp : a.amplitude) amp = 0;  // passive
