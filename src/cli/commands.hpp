@@ -53,6 +53,16 @@ struct DemoArgs {
 };
 int demo(const DemoArgs& a);
 
+// divcoll tether RUN.h5 --out DIR [--pairs N] [--replicate R] [--steps T]: what the run's tethers do to each agent of
+// its deployed pairs (collective::tether_effect), every environment of its deployment
+struct TetherArgs {
+  std::string run, out = "out/tether";
+  int pairs = 20, replicate = 0;
+  int steps = 0;  // 0: the run's deploy.episode_steps
+  bool force = false;
+};
+int tether(const TetherArgs& a);
+
 // divcoll report RUN.h5 --out DIR: the report pages of a run file (divcoll_post.report under find_python())
 struct ReportArgs {
   std::string run, out = "out/report";
