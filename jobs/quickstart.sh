@@ -12,7 +12,10 @@ say() { printf '[%4ds] %s\n' "$(( $(date +%s) - t0 ))" "$*"; }
 fail() { say "FAILED: $1 (see $2)"; tail -n 5 "$2" | cut -c1-116 >&2; exit 1; }
 
 say "install: Debian packages for building and running (apt's output: out/logs/apt.log)"
-bash jobs/install-deps.sh --log out/logs/apt.log | cut -c1-116 || fail "install" out/logs/apt.log
+bash jobs/install-deps.sh --only build --log out/logs/apt.log | cut -c1-116 || fail "install" out/logs/apt.log
+# what only the report needs (Python's numpy, matplotlib ..., ffmpeg) installs while the program builds and runs
+bash jobs/install-deps.sh --only report --log out/logs/apt-report.log >out/logs/apt-report.out 2>&1 &
+apt_pid=$!
 source jobs/mpi-env.sh
 say "build: cmake, $(nproc) jobs (output: out/logs/build.log)"
 bash jobs/build.sh --target divcoll >out/logs/build.log 2>&1 || fail "build" out/logs/build.log
@@ -37,6 +40,9 @@ mpirun -np "$(nproc)" build/divcoll run configs/quick.toml --out out/quick.h5 --
 rc=${PIPESTATUS[0]}
 set -e
 [ "$rc" -eq 0 ] || fail "run (exit $rc)" out/logs/run.log
+
+wait "$apt_pid" || fail "install of the report's packages" out/logs/apt-report.out
+cut -c1-116 out/logs/apt-report.out
 
 # the demo runs beside the report (each mostly one core; the report's movie clips share the cores too)
 say "report: out/report/report.html and report.md, figures, a movie (output: out/logs/report.log)"
