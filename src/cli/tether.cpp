@@ -8,6 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <thread>
+
+#include <unistd.h>
 
 #include "cli/commands.hpp"
 #include "collective/deploy_variants.hpp"
@@ -59,6 +62,11 @@ void write_summary(std::ostream& md, const std::vector<TetherRow>& rows, const s
     }
     at = end;
   }
+}
+
+std::string host() {
+  char name[256] = {0};
+  return gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string("an unnamed host");
 }
 
 }  // namespace
@@ -119,7 +127,7 @@ int tether(const TetherArgs& a) {
   std::ofstream csv(csv_path);
   csv << "environment,deployment,connector,pair,posterior,anterior,status,pair_travel_bl,posterior_travel_bl,"
          "anterior_travel_bl,posterior_impulse_x,anterior_impulse_x,posterior_work,anterior_work,force_time\n";
-  csv.precision(17);
+  csv.precision(10);
   for (const auto& r : rows) {
     const auto& e = r.effect;
     csv << r.env << ',' << r.deployment << ',' << r.connector << ',' << r.pair << ',' << r.posterior << ','
@@ -131,7 +139,7 @@ int tether(const TetherArgs& a) {
   md << "# What the tether does to each agent of a pair\n\n"
      << "Run file `" << a.run << "` (commit " << f.read_string("git_commit") << "); command `divcoll tether " << a.run
      << " --pairs " << a.pairs << " --replicate " << a.replicate << "`, divcoll " << DIVCOLL_VERSION << " ("
-     << git_commit() << ").\n\n"
+     << git_commit() << ") on " << host() << ", one core of " << std::thread::hardware_concurrency() << ".\n\n"
      << "The first " << a.pairs << " deployed pairs of each deployment (uniform: clones; diverse: the deploy stage's "
      << "pairs), " << steps << " steps, the weak connector kind of the deployment (replicate " << a.replicate
      << ") beside the passive and follower references. Differences are against the free tether (stiffness 0: each "

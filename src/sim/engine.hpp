@@ -103,11 +103,11 @@ struct RunResult {
   // with record_inputs: (n_records x C*5 x 11), the networks' inputs at those steps
   std::vector<double> inputs;
   // with record_tether: (C*5 x kTetherColumns) per connector spring s = (i, j), in connector then spring order,
-  // summed over every physics substep of the episode (h = Δt / substeps, the spring's force f on i from SPEC §2
-  // step 2 with the substep's starting x, v and o; −f acts on j):
+  // summed over every physics substep of the episode (h = Δt / substeps; f the spring's force on i from SPEC §2
+  // step 2 with the substep's starting x, v and o; −f acts on j; Δx a mass's displacement over the substep):
   //   impulse_x_i, impulse_y_i   Σ f h               (mass·u/s; on j it is the negative)
-  //   work_i, work_j             Σ f·v_i h, Σ −f·v_j h  (mass·u²/s², left Riemann sums of the power)
-  //   force_time                 Σ |f| h             (mass·u/s, the tether's force magnitude integrated over time)
+  //   work_i, work_j             Σ f·Δx_i, Σ −f·Δx_j  (mass·u²/s², the work the spring did on each mass)
+  //   force_time                 Σ |f| h             (mass·u/s, the spring's force magnitude integrated over time)
   std::vector<double> tether;
 };
 

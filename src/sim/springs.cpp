@@ -70,7 +70,7 @@ void springs_forward(const Model& m, const double* x, const double* v, const dou
   scatter(SpringArrays(m), fx, fy, F);
 }
 
-void tether_accumulate(const Model& m, const double* v, double* tether) {
+void tether_accumulate(const Model& m, const double* x0, const double* x1, double* tether) {
   const double* fx = m.spring_scratch.data();
   const double* fy = fx + m.S;
   const int32_t* si = m.scene->spring_i.data();
@@ -81,8 +81,8 @@ void tether_accumulate(const Model& m, const double* v, double* tether) {
     double* row = tether + c * kTetherColumns;
     row[0] += fx[s] * m.h;
     row[1] += fy[s] * m.h;
-    row[2] += (fx[s] * v[2 * i] + fy[s] * v[2 * i + 1]) * m.h;
-    row[3] -= (fx[s] * v[2 * j] + fy[s] * v[2 * j + 1]) * m.h;
+    row[2] += fx[s] * (x1[2 * i] - x0[2 * i]) + fy[s] * (x1[2 * i + 1] - x0[2 * i + 1]);
+    row[3] -= fx[s] * (x1[2 * j] - x0[2 * j]) + fy[s] * (x1[2 * j + 1] - x0[2 * j + 1]);
     row[4] += std::sqrt(fx[s] * fx[s] + fy[s] * fy[s]) * m.h;
   }
 }

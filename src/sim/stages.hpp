@@ -42,9 +42,10 @@ size_t control_scratch_count(const Model& m);
 
 // ---- springs -----------------------------------------------------------------------------------
 void springs_forward(const Model& m, const double* x, const double* v, const double* o, double* F);
-// adds the connector springs' impulse and work of the substep springs_forward just computed (its per-spring forces,
-// still in m.spring_scratch) into `tether` (C*5 rows of kTetherColumns, RunResult::tether); v: the substep's start
-void tether_accumulate(const Model& m, const double* v, double* tether);
+// adds the connector springs' impulse and work of a substep into `tether` (C*5 rows of kTetherColumns,
+// RunResult::tether): their forces are springs_forward's, still in m.spring_scratch; x0, x1 the substep's positions
+// before and after (the work is the force on the mass's displacement over the substep)
+void tether_accumulate(const Model& m, const double* x0, const double* x1, double* tether);
 // Fb: gradient w.r.t. F; adds into xb, vb, ob, Lb
 void springs_adjoint(const Model& m, const double* x, const double* v, const double* o, const double* Fb,
                      double* xb, double* vb, double* ob, double* Lb);

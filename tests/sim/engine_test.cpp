@@ -119,8 +119,9 @@ TEST(Engine, TetherImpulseIsEachAgentsMomentumChangeWithoutGroundGravityOrDampin
 }
 
 // record_tether's five sums recomputed from the recorded states for a tether whose network outputs 0 (every weight 0:
-// the springs hold their rest lengths, so f = −k (ℓ − L) d̂ − c ((v_i − v_j)·d̂) d̂ needs only x and v), one substep
-TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndPowerOnEachMass) {
+// the springs hold their rest lengths, so f = −k (ℓ − L) d̂ − c ((v_i − v_j)·d̂) d̂ needs only x and v), one substep:
+// impulse f h, work f on each mass's displacement, ∫|f| dt
+TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndWorkOnEachMass) {
   const morph::Agent a = make_agent(5), b = make_agent(6);
   const std::vector<double> zero(sim::connector_param_count(), 0.0);
   const sim::Scene s = collective::pair_scene(a, b, zero, testing::weak_connector(), "flat", testing::kCoulomb);
@@ -146,8 +147,9 @@ TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndPowerOnEachMass) {
       const double mag = -s.stiffness[sp] * (l - s.rest_length[sp]) - s.damping[sp] * w;
       const double fx = mag * ux, fy = mag * uy;
       want[0] += fx * h, want[1] += fy * h;
-      want[2] += (fx * v[2 * i] + fy * v[2 * i + 1]) * h;
-      want[3] -= (fx * v[2 * j] + fy * v[2 * j + 1]) * h;
+      const double* x1 = x + N * 2;  // the step's end (one substep)
+      want[2] += fx * (x1[2 * i] - x[2 * i]) + fy * (x1[2 * i + 1] - x[2 * i + 1]);
+      want[3] -= fx * (x1[2 * j] - x[2 * j]) + fy * (x1[2 * j + 1] - x[2 * j + 1]);
       want[4] += std::hypot(fx, fy) * h;
     }
     for (int k = 0; k < sim::kTetherColumns; ++k) {
