@@ -300,7 +300,7 @@ bool Simulator::Impl::forward_step(Episode& e, int t) {
     velocity_forward(m, t, sx(k), sv(k), F.data(), vp);
     contact_forward(m, sx(k), vp, sx(k + 1), sv(k + 1), st(k + 1),
                     opt.grad ? recs.data() + (static_cast<size_t>(k) * N) : nullptr);
-    if (opt.record_tether) tether_accumulate(m, sx(k), sx(k + 1), res.tether.data());
+    if (opt.record_tether) tether_accumulate(m, sx(k), sv(k), sx(k + 1), res.tether.data());
     if (opt.grad) count_contacts(recs.data() + (static_cast<size_t>(k) * N), N, res.contacts);
   }
   // numerical trouble ends the episode, with where it happened

@@ -104,9 +104,10 @@ struct RunResult {
   std::vector<double> inputs;
   // with record_tether: (C*5 x kTetherColumns) per connector spring s = (i, j), in connector then spring order,
   // summed over every physics substep of the episode (h = Δt / substeps; f the spring's force on i from SPEC §2
-  // step 2 with the substep's starting x, v and o; −f acts on j; Δx a mass's displacement over the substep):
+  // step 2 with the substep's starting x, v and o; −f acts on j; p a mass's path over the substep, the mean of
+  // h·v at its start and its displacement Δx, so that a passive spring's work is its stored energy's loss to O(h²)):
   //   impulse_x_i, impulse_y_i   Σ f h               (mass·u/s; on j it is the negative)
-  //   work_i, work_j             Σ f·Δx_i, Σ −f·Δx_j  (mass·u²/s², the work the spring did on each mass)
+  //   work_i, work_j             Σ f·p_i, Σ −f·p_j    (mass·u²/s², the work the spring did on each mass)
   //   force_time                 Σ |f| h             (mass·u/s, the spring's force magnitude integrated over time)
   std::vector<double> tether;
 };

@@ -43,9 +43,9 @@ size_t control_scratch_count(const Model& m);
 // ---- springs -----------------------------------------------------------------------------------
 void springs_forward(const Model& m, const double* x, const double* v, const double* o, double* F);
 // adds the connector springs' impulse and work of a substep into `tether` (C*5 rows of kTetherColumns,
-// RunResult::tether): their forces are springs_forward's, still in m.spring_scratch; x0, x1 the substep's positions
-// before and after (the work is the force on the mass's displacement over the substep)
-void tether_accumulate(const Model& m, const double* x0, const double* x1, double* tether);
+// RunResult::tether): their forces are springs_forward's, still in m.spring_scratch; x0, v0 the substep's starting
+// positions and velocities, x1 its final positions
+void tether_accumulate(const Model& m, const double* x0, const double* v0, const double* x1, double* tether);
 // Fb: gradient w.r.t. F; adds into xb, vb, ob, Lb
 void springs_adjoint(const Model& m, const double* x, const double* v, const double* o, const double* Fb,
                      double* xb, double* vb, double* ob, double* Lb);

@@ -120,7 +120,7 @@ TEST(Engine, TetherImpulseIsEachAgentsMomentumChangeWithoutGroundGravityOrDampin
 
 // record_tether's five sums recomputed from the recorded states for a tether whose network outputs 0 (every weight 0:
 // the springs hold their rest lengths, so f = −k (ℓ − L) d̂ − c ((v_i − v_j)·d̂) d̂ needs only x and v), one substep:
-// impulse f h, work f on each mass's displacement, ∫|f| dt
+// impulse f h, work f on each mass's path (the mean of h v and Δx), ∫|f| dt
 TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndWorkOnEachMass) {
   const morph::Agent a = make_agent(5), b = make_agent(6);
   const std::vector<double> zero(sim::connector_param_count(), 0.0);
@@ -148,8 +148,9 @@ TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndWorkOnEachMass) {
       const double fx = mag * ux, fy = mag * uy;
       want[0] += fx * h, want[1] += fy * h;
       const double* x1 = x + N * 2;  // the step's end (one substep)
-      want[2] += fx * (x1[2 * i] - x[2 * i]) + fy * (x1[2 * i + 1] - x[2 * i + 1]);
-      want[3] -= fx * (x1[2 * j] - x[2 * j]) + fy * (x1[2 * j + 1] - x[2 * j + 1]);
+      auto path = [&](int q, int a) { return 0.5 * (h * v[2 * q + a] + x1[2 * q + a] - x[2 * q + a]); };
+      want[2] += fx * path(i, 0) + fy * path(i, 1);
+      want[3] -= fx * path(j, 0) + fy * path(j, 1);
       want[4] += std::hypot(fx, fy) * h;
     }
     for (int k = 0; k < sim::kTetherColumns; ++k) {
@@ -159,6 +160,38 @@ TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndWorkOnEachMass) {
     largest = std::max(largest, want[4]);
   }
   EXPECT_GT(largest, 1e-3) << "the passive tether should pull";
+}
+
+// a held tether (weights 0) is a set of ordinary springs: with no ground, gravity or damping, the work its springs did
+// on the masses is the elastic energy they hold at the end, negated (they start at rest length), to the O(h²) of the
+// step; the work's estimate is what makes that hold (force times Δx alone, or times h·v alone, misses it by far more)
+TEST(Engine, AHeldTethersWorkIsTheLossOfItsStoredEnergy) {
+  const morph::Agent a = make_agent(7), b = make_agent(8);
+  const std::vector<double> zero(sim::connector_param_count(), 0.0);
+  sim::Scene s = collective::pair_scene(a, b, zero, testing::weak_connector(), "flat", testing::kCoulomb);
+  s.env.gravity = 0;
+  s.env.damping = 0;
+  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
+  s.constants.substeps = 4;
+  sim::RunOptions opt;
+  opt.steps = 600;
+  opt.record = true;
+  opt.record_tether = true;
+  const sim::RunResult r = sim::simulate(s, opt);
+  ASSERT_EQ(r.status, sim::Status::ok) << r.message;
+  const int N = s.n_masses();
+  const double* x = &r.x[static_cast<size_t>(opt.steps) * N * 2];
+  double work = 0, stored = 0, force_time = 0;
+  for (size_t c = 0; c < s.connector_spring_index.size(); ++c) {
+    const int sp = s.connector_spring_index[c], i = s.spring_i[sp], j = s.spring_j[sp];
+    work += r.tether[c * sim::kTetherColumns + 2] + r.tether[c * sim::kTetherColumns + 3];
+    force_time += r.tether[c * sim::kTetherColumns + 4];
+    const double e = std::hypot(x[2 * i] - x[2 * j], x[2 * i + 1] - x[2 * j + 1]) - s.rest_length[sp];
+    stored += 0.5 * s.stiffness[sp] * e * e;
+  }
+  ASSERT_GT(force_time, 1e-2) << "the agents' gaits should stretch the tether";
+  // scale: what one spring force does over the episode's path, |f| dt times a typical speed of 0.1 u/s
+  EXPECT_NEAR(work, -stored, 0.1 * stored) << "stored " << stored << ", force·time " << force_time;
 }
 
 TEST(Engine, DampingRemovesEnergyFromPassiveBody) {
