@@ -510,36 +510,23 @@ def reference_lines(pops: Sequence[V.Population]) -> List[str]:
     return lines
 
 
-def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]], B: int = 4000) -> List[str]:
-    """markdown: environment by environment, the weak matched pairs' travel minus that of their agents alone (3000
-    steps), mean over populations with a hierarchical-bootstrap 95% interval and the populations in which the pair
-    went further; one pair of columns per training. Exploratory: no registered claim, no multiplicity control."""
-    have = [(name, pops) for name, pops in trainings if pops]
-    if not have:
-        return []
-    p0 = have[0][1][0]
-    pairs = [(V.WU, "weak uniform on clones"), (V.WD, "weak diverse on diverse pairs")]
-    alone = {e: float(np.mean([p.alone()[i] for p in have[0][1]])) for i, e in enumerate(p0.envs)}
-    envs = sorted(p0.envs, key=lambda e: -alone[e])
-    head = " | ".join(f"{name}: {label}" for name, pops in have for _, label in pairs)
-    lines = ["", "## Pairs against their agents alone, environment by environment (exploratory)", "",
-             "The registered claims compare collectives with agents alone on flat (C07, C08) and over the novel "
-             "environments (C11, C16). Environment by environment, a weak connector's pair travels less than its two "
-             "agents alone wherever those walk well, and further wherever they stall. Travel of the pair minus that "
-             "of its agents alone, BL over 3000 steps: mean over populations [hierarchical-bootstrap 95% interval] "
-             "(populations in which the pair went further / populations). Not a registered claim: read it as a "
-             "pattern, not as 26 tests. Environments in order of the agents' travel alone (paper-faithful "
-             "populations).", "",
-             f"| environment | agents alone | {head} |", "|---" * (2 + len(have) * len(pairs)) + "|"]
+FREE = {V.WU: "free@uniform", V.WD: "free@diverse"}  # the free reference on the same pairs as each weak kind
+
+
+def _pair_difference_rows(have, envs, base, B):
+    """rows of (environment, cells): per training and weak kind, the matched pairs' travel minus base(p, ei, t) over
+    populations, a hierarchical-bootstrap 95% interval from 3 populations on, and the count where the pair went
+    further"""
+    rows = []
     for e in envs:
         cells = []
         for _, pops in have:
             ei = pops[0].envs.index(e)
-            for t, _ in pairs:
+            for t in (V.WU, V.WD):
                 ti = pops[0].types.index(t)
 
-                def fn(p, d, protocol, ei=ei, ti=ti):
-                    return p.T(d)[:, ei, ti] - p.alone(protocol)[ei]
+                def fn(p, d, protocol, ei=ei, ti=ti, t=t):
+                    return p.T(d)[:, ei, ti] - base(p, ei, t, protocol)
 
                 if len(pops) >= 3:
                     m, lo, hi, point = _mean_ci(pops, fn, B=B)
@@ -548,7 +535,56 @@ def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]]
                     point = np.array([float(fn(p, None, "same_length")[0]) for p in pops])
                     m, ci = float(np.mean(point)), ""
                 cells.append(f"{m:+.2f}{ci} ({int(np.sum(point > 0))}/{len(pops)})")
-        lines.append(f"| {e} | {alone[e]:.2f} | " + " | ".join(cells) + " |")
+        rows.append((e, cells))
+    return rows
+
+
+def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]], B: int = 4000) -> List[str]:
+    """markdown: environment by environment, the weak matched pairs' travel minus that of their agents alone, and
+    minus that of the free pair on the same pairs (no tether: each agent as alone, but placed as in the pair), 3000
+    steps, mean over populations with a hierarchical-bootstrap 95% interval and the populations in which the pair went
+    further; one pair of columns per training. Exploratory: no registered claim, no multiplicity control."""
+    have = [(name, pops) for name, pops in trainings if pops]
+    if not have:
+        return []
+    p0 = have[0][1][0]
+    labels = [(V.WU, "weak uniform on clones"), (V.WD, "weak diverse on diverse pairs")]
+    alone = {e: float(np.mean([p.alone()[i] for p in have[0][1]])) for i, e in enumerate(p0.envs)}
+    envs = sorted(p0.envs, key=lambda e: -alone[e])
+    head = " | ".join(f"{name}: {label}" for name, _ in have for _, label in labels)
+    rule = "|---" * (2 + len(have) * len(labels)) + "|"
+    lines = ["", "## Pairs against their agents alone, environment by environment (exploratory)", "",
+             "The registered claims compare collectives with agents alone on flat (C07, C08) and over the novel "
+             "environments (C11, C16). Environment by environment, a weak connector's pair travels less than its two "
+             "agents alone wherever those walk well, and further wherever they stall. Travel of the pair minus that "
+             "of its agents alone, BL over 3000 steps: mean over populations [hierarchical-bootstrap 95% interval] "
+             "(populations in which the pair went further / populations). Not a registered claim: read it as a "
+             "pattern, not as 26 tests. Environments in order of the agents' travel alone (paper-faithful "
+             "populations).", "",
+             f"| environment | agents alone | {head} |", rule]
+    lines += [f"| {e} | {alone[e]:.2f} | " + " | ".join(c) + " |"
+              for e, c in _pair_difference_rows(have, envs, lambda p, ei, t, pr: p.alone(pr)[ei], B)]
+    with_free = [(name, [p for p in pops if all(f in p.references() for f in FREE.values())]) for name, pops in have]
+    with_free = [(name, pops) for name, pops in with_free if pops]
+    if not with_free:
+        return lines
+    pf = with_free[0][1]
+    gap = {e: [float(np.mean([p.references()[FREE[t]][i] - p.alone()[i] for p in pf])) for t in (V.WU, V.WD)]
+           for i, e in enumerate(pf[0].envs)}
+    head = " | ".join(f"{name}: {label}" for name, _ in with_free for _, label in labels)
+    lines += ["", "The agents of a pair do not start where an agent alone does: terrain features (a gap, an obstacle, "
+              "a step) begin 0.05 u ahead of the collective's front (deploy.feature_placement = front), so the "
+              "posterior walks its body length and more before it meets them. The *free* pair (no tether: each agent "
+              "walks as alone, from its place in the pair) separates that placement from the tether. Below, the "
+              "same pairs' travel minus the free pair's on the same pairs, and in the second column the free pair "
+              "minus agents alone (mean over the first training's populations, clones / diverse pairs): where that "
+              "column is positive, the table above credits the tether with what the placement did. Populations whose "
+              "runs deployed the references: " + ", ".join(f"{name} {len(pops)}" for name, pops in with_free) + ".",
+              "", f"| environment | free pair − agents alone | {head} |",
+              "|---" * (2 + len(with_free) * len(labels)) + "|"]
+    lines += [f"| {e} | {gap[e][0]:+.2f} / {gap[e][1]:+.2f} | " + " | ".join(c) + " |"
+              for e, c in _pair_difference_rows(with_free, envs,
+                                                lambda p, ei, t, pr: p.references(pr)[FREE[t]][ei], B)]
     return lines
 
 

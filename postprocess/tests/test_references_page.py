@@ -95,6 +95,38 @@ class PairsAgainstAlone(unittest.TestCase):
         self.assertEqual(last[4], "+0.50 (2/2)")  # two populations: no interval
         self.assertEqual(verdict_page.pairs_vs_alone_lines([("paper-faithful", [])]), [])
 
+    def test_each_environment_also_shows_the_pair_against_the_free_pair_on_the_same_pairs(self):
+        rng = np.random.Generator(np.random.PCG64(6))
+        pops = []
+        for s in range(1, 5):
+            a = with_references(synthetic(s, rng))
+            alone = np.asarray(a["deploy"]["alone_bl"], float)
+            coll = np.asarray(a["deploy"]["collectives_bl"], float)
+            refs = np.asarray(a["deploy"]["references_bl"], float)
+            # in the last environment the free pair travels 0.3 BL beyond agents alone (placement), the matched
+            # weak pairs 0.5 BL: 0.2 of it is the tether's; on flat the pairs lose 2 BL to both
+            for t in (V.WU, V.WD):
+                ti = a["deploy"]["types"].index(t)
+                coll[0, ti, :] = alone[0] - 2.0
+                coll[-1, ti, :] = alone[-1] + 0.5
+                refs[-1, REFS.index(verdict_page.FREE[t])] = alone[-1] + 0.3
+            a["deploy"]["collectives_bl"] = coll.tolist()
+            a["deploy"]["references_bl"] = refs.tolist()
+            pops.append(V.Population(s, [a]))
+        no_refs = V.Population(5, [synthetic(5, rng)])
+        lines = verdict_page.pairs_vs_alone_lines([("paper-faithful", pops + [no_refs]), ("best-effort", pops[:2])],
+                                                  B=300)
+        rows = {r[0]: r for r in md_table("\n".join(lines), "| environment | free pair − agents alone |")}
+        self.assertEqual(set(rows), set(ENVS))
+        flat, last = rows["flat"], rows[ENVS[-1]]
+        free_d = np.mean([-0.1 * p.alone()[0] for p in pops])  # free@diverse: 0.9 of agents alone (with_references)
+        self.assertEqual(flat[1], f"+0.00 / {free_d:+.2f}")
+        self.assertTrue(flat[2].startswith("-2.00 [-2.00, -2.00] (0/4)"), flat)  # the population without references
+        self.assertEqual(last[1], "+0.30 / +0.30")                                # is left out of this table
+        self.assertTrue(last[2].startswith("+0.20 [+0.20, +0.20] (4/4)"), last)
+        self.assertEqual(last[4], "+0.20 (2/2)")
+        self.assertIn("paper-faithful 4, best-effort 2", "\n".join(lines))
+
 
 class AmendmentStatistics(unittest.TestCase):
     def test_c24b_is_the_log_ratio_of_exclusive_states(self):
