@@ -555,12 +555,11 @@ def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]]
     rule = "|---" * (2 + len(have) * len(labels)) + "|"
     lines = ["", "## Pairs against their agents alone, environment by environment (exploratory)", "",
              "The registered claims compare collectives with agents alone on flat (C07, C08) and over the novel "
-             "environments (C11, C16). Environment by environment, a weak connector's pair travels less than its two "
-             "agents alone wherever those walk well, and further wherever they stall. Travel of the pair minus that "
+             "environments (C11, C16). Environment by environment: travel of the pair minus that "
              "of its agents alone, BL over 3000 steps: mean over populations [hierarchical-bootstrap 95% interval] "
              "(populations in which the pair went further / populations). Not a registered claim: read it as a "
              "pattern, not as 26 tests. Environments in order of the agents' travel alone (paper-faithful "
-             "populations).", "",
+             "populations). The second table separates the tether's part from where the terrain features start.", "",
              f"| environment | agents alone | {head} |", rule]
     lines += [f"| {e} | {alone[e]:.2f} | " + " | ".join(c) + " |"
               for e, c in _pair_difference_rows(have, envs, lambda p, ei, t, pr: p.alone(pr)[ei], B)]
@@ -579,7 +578,9 @@ def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]]
               "same pairs' travel minus the free pair's on the same pairs, and in the second column the free pair "
               "minus agents alone (mean over the first training's populations, clones / diverse pairs): where that "
               "column is positive, the table above credits the tether with what the placement did. Populations whose "
-              "runs deployed the references: " + ", ".join(f"{name} {len(pops)}" for name, pops in with_free) + ".",
+              "runs deployed the references: " + ", ".join(f"{name} {len(pops)}" for name, pops in with_free) + ". What "
+              "the tether does to each agent of a pair (its impulse, its work, each agent's travel against the free "
+              "pair): `divcoll tether RUN.h5`, kept for two populations in [../tether/](../tether/besteffort_seed12.md).",
               "", f"| environment | free pair − agents alone | {head} |",
               "|---" * (2 + len(with_free) * len(labels)) + "|"]
     lines += [f"| {e} | {gap[e][0]:+.2f} / {gap[e][1]:+.2f} | " + " | ".join(c) + " |"
