@@ -580,7 +580,7 @@ def pairs_vs_alone_lines(trainings: Sequence[Tuple[str, Sequence[V.Population]]]
               "column is positive, the table above credits the tether with what the placement did. Populations whose "
               "runs deployed the references: " + ", ".join(f"{name} {len(pops)}" for name, pops in with_free) + ". What "
               "the tether does to each agent of a pair (its impulse, its work, each agent's travel against the free "
-              "pair): `divcoll tether RUN.h5`, kept for two populations in [../tether/](../tether/besteffort_seed12.md).",
+              "pair): `divcoll tether RUN.h5`, over populations in [../tether/tether.md](../tether/tether.md).",
               "", f"| environment | free pair − agents alone | {head} |",
               "|---" * (2 + len(with_free) * len(labels)) + "|"]
     lines += [f"| {e} | {gap[e][0]:+.2f} / {gap[e][1]:+.2f} | " + " | ".join(c) + " |"
