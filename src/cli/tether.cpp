@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include <unistd.h>
@@ -94,27 +95,30 @@ int tether(const TetherArgs& a) {
   const std::vector<int32_t> dp = f.read<int32_t>("deploy/diverse_pairs");
   const auto up = collective::deploy_uniform_pairs(cfg.deploy, cfg.connectors);
   const std::vector<std::string> envs = io::split(f.group("deploy").read_string("environments"));
-  const std::vector<std::string> names = {"free", "passive", "follower", "trained"};
   const int steps = a.steps > 0 ? a.steps : cfg.deploy.episode_steps;
+  // each deployment's tethers, built once: the references (free first, the baseline of every difference), then the
+  // trained weak kind of the deployment
+  std::map<std::string, std::vector<collective::ReferenceConnector>> tethers;
+  for (const std::string dep : {"uniform", "diverse"}) {
+    for (std::string_view name : collective::kReferenceConnectors)
+      tethers[dep].push_back(collective::reference_connector(cfg.connectors, name));
+    const std::string kind = "weak_" + dep;
+    tethers[dep].push_back({"trained", collective::tether(cfg.connectors, kind),
+                            io::read_weights_row(f, "connectors/" + kind, a.replicate)});
+  }
+  std::vector<std::string> names;
+  for (const auto& t : tethers["uniform"]) names.push_back(t.name);
 
   sim::Simulator sim;
   std::vector<TetherRow> rows;
   const auto t0 = std::chrono::steady_clock::now();
   for (const std::string& env : envs) {
     for (const std::string dep : {"uniform", "diverse"}) {
-      const std::string kind = "weak_" + dep;
-      const std::vector<double> trained = io::read_weights_row(f, "connectors/" + kind, a.replicate);
       for (int q = 0; q < a.pairs; ++q) {
         const int p = dep == "diverse" ? dp[2 * q] : up[q].first, r = dep == "diverse" ? dp[2 * q + 1] : up[q].second;
-        for (const std::string& name : names) {
-          const bool is_trained = name == "trained";
-          const collective::ReferenceConnector ref =
-              collective::reference_connector(cfg.connectors, is_trained ? "follower" : name);
-          const collective::Tether k = is_trained ? collective::tether(cfg.connectors, kind) : ref.tether;
-          rows.push_back({env, dep, name, q, p, r,
-                          collective::tether_effect(sim, agents[p], agents[r], is_trained ? trained : ref.weights, k,
-                                                    env, physics, steps)});
-        }
+        for (const auto& t : tethers[dep])
+          rows.push_back({env, dep, t.name, q, p, r,
+                          collective::tether_effect(sim, agents[p], agents[r], t.weights, t.tether, env, physics, steps)});
       }
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -33,6 +33,18 @@ sim::Scene free_masses(int n) {
   return s;
 }
 
+// a pair with no ground, gravity or damping: the ground is far below, and 4 substeps keep the undamped, actuated
+// springs well inside the stability limit
+sim::Scene floating_pair(uint64_t seed_a, uint64_t seed_b, const std::vector<double>& conn) {
+  sim::Scene s = collective::pair_scene(make_agent(seed_a), make_agent(seed_b), conn, testing::weak_connector(), "flat",
+                                        testing::kCoulomb);
+  s.env.gravity = 0;
+  s.env.damping = 0;
+  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
+  s.constants.substeps = 4;
+  return s;
+}
+
 TEST(Engine, FreeFallMatchesClosedForm) {
   sim::Scene s = free_masses(3);
   const int T = 200;
@@ -54,12 +66,7 @@ TEST(Engine, FreeFallMatchesClosedForm) {
 }
 
 TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
-  const morph::Agent a = make_agent(1), b = make_agent(2);
-  sim::Scene s = collective::pair_scene(a, b, make_conn(1), testing::weak_connector(), "flat", testing::kCoulomb);
-  s.env.gravity = 0;
-  s.env.damping = 0;
-  s.env.terrain = {sim::Segment{-1e9, -50, 0}};  // the ground is far below
-  s.constants.substeps = 4;  // undamped and actuated: stay well inside the stability limit
+  const sim::Scene s = floating_pair(1, 2, make_conn(1));
   sim::RunOptions opt;
   opt.steps = 500;
   opt.record = true;
@@ -83,12 +90,7 @@ TEST(Engine, MomentumConservedWithoutGroundGravityOrDamping) {
 // record_tether: with no ground, gravity or damping the agents' own springs cancel inside each agent, so the change of
 // an agent's momentum is exactly the impulse the tether's springs gave it
 TEST(Engine, TetherImpulseIsEachAgentsMomentumChangeWithoutGroundGravityOrDamping) {
-  const morph::Agent a = make_agent(1), b = make_agent(2);
-  sim::Scene s = collective::pair_scene(a, b, make_conn(1), testing::weak_connector(), "flat", testing::kCoulomb);
-  s.env.gravity = 0;
-  s.env.damping = 0;
-  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
-  s.constants.substeps = 4;
+  const sim::Scene s = floating_pair(1, 2, make_conn(1));
   sim::RunOptions opt;
   opt.steps = 400;
   const double travel = sim::simulate(s, opt).travel;
@@ -166,13 +168,7 @@ TEST(Engine, TetherSumsAreTheSpringForcesImpulseAndWorkOnEachMass) {
 // on the masses is the elastic energy they hold at the end, negated (they start at rest length), to the O(h²) of the
 // step; the work's estimate is what makes that hold (force times Δx alone, or times h·v alone, misses it by far more)
 TEST(Engine, AHeldTethersWorkIsTheLossOfItsStoredEnergy) {
-  const morph::Agent a = make_agent(7), b = make_agent(8);
-  const std::vector<double> zero(sim::connector_param_count(), 0.0);
-  sim::Scene s = collective::pair_scene(a, b, zero, testing::weak_connector(), "flat", testing::kCoulomb);
-  s.env.gravity = 0;
-  s.env.damping = 0;
-  s.env.terrain = {sim::Segment{-1e9, -50, 0}};
-  s.constants.substeps = 4;
+  const sim::Scene s = floating_pair(7, 8, std::vector<double>(sim::connector_param_count(), 0.0));
   sim::RunOptions opt;
   opt.steps = 600;
   opt.record = true;
