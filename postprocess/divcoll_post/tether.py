@@ -1,5 +1,6 @@
-"""What the tether does to each agent of a pair, over several populations: the `tether.csv` files that `divcoll tether
-RUN.h5` writes (one row per episode: a pair, a connector, its environment) summarised into one page and one picture.
+"""What the tether does to each agent of a pair: the `tether.csv` files that `divcoll tether RUN.h5` writes (one row per
+episode: a pair, a connector, its environment; gzipped or not) summarised into one page and one picture, for one
+population (`divcoll tether` runs this module on its own table) or over several.
 
 Per environment and connector, over the pairs of each population and then over populations (mean, and the range of
 the population means): the pair's travel against the free tether on the same pairs (no springs: each agent as it walks
@@ -7,13 +8,15 @@ alone from its place in the pair), the slower and the faster agent's (slower: le
 tether's net horizontal push on the slower agent as a share of the force it exerted (∫|f|dt over its five springs),
 and the work its springs did on both agents.
 
-    /usr/bin/python3 -m divcoll_post.tether postprocess/gallery/tether/besteffort_seed*.csv --out postprocess/gallery/tether
+    /usr/bin/python3 -m divcoll_post.tether postprocess/gallery/tether/besteffort_seed*/tether.csv.gz \
+        --out postprocess/gallery/tether
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import gzip
 import os
 import re
 from typing import Dict, List, Sequence, Tuple
@@ -23,13 +26,14 @@ import numpy as np
 from . import results as R
 
 CONNECTORS = ("passive", "follower", "trained")
-COLUMNS = ("pair", "slower", "faster", "push", "work")
+COLUMNS = ("travel", "pair", "slower", "faster", "push", "work")
 
 
 def read(path: str) -> Dict[Tuple[str, str, str], Dict[str, float]]:
     """{(environment, deployment, connector): {column: mean over the pairs}} of one tether.csv, each against the free
     tether of the same pair; pairs whose episode (or free episode) did not end ok are left out"""
-    with open(path, newline="", encoding="utf-8") as fh:
+    opener = gzip.open if path.endswith(".gz") else open
+    with opener(path, "rt", newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     free = {(r["environment"], r["deployment"], r["pair"]): r for r in rows if r["connector"] == "free"}
     acc: Dict[Tuple[str, str, str], List[List[float]]] = {}
@@ -42,7 +46,7 @@ def read(path: str) -> Dict[Tuple[str, str, str], Dict[str, float]]:
         fast = "anterior" if slow == "posterior" else "posterior"
         ft = float(r["force_time"])
         acc.setdefault((r["environment"], r["deployment"], r["connector"]), []).append([
-            float(r["pair_travel_bl"]) - float(f["pair_travel_bl"]),
+            float(r["pair_travel_bl"]), float(r["pair_travel_bl"]) - float(f["pair_travel_bl"]),
             float(r[f"{slow}_travel_bl"]) - float(f[f"{slow}_travel_bl"]),
             float(r[f"{fast}_travel_bl"]) - float(f[f"{fast}_travel_bl"]),
             float(r[f"{slow}_impulse_x"]) / ft if ft > 0 else 0.0,
@@ -51,8 +55,9 @@ def read(path: str) -> Dict[Tuple[str, str, str], Dict[str, float]]:
 
 
 def population_of(path: str) -> str:
-    m = re.search(r"seed(\d+)", os.path.basename(path))
-    return m.group(1) if m else os.path.basename(path)
+    """the population a table belongs to: the last `seed<k>` in its path (a file or the folder that holds it)"""
+    m = re.findall(r"seed(\d+)", path)
+    return m[-1] if m else os.path.basename(path)
 
 
 def summarise(paths: Sequence[str]):
@@ -69,34 +74,40 @@ def cell(x: np.ndarray, fmt: str) -> str:
     return f"{np.mean(x):{fmt}}" + (f" [{np.min(x):{fmt}}, {np.max(x):{fmt}}]" if len(x) > 1 else "")
 
 
-def page(paths: Sequence[str], out: str) -> str:
-    """OUT/tether.md and OUT/tether.png from the tether.csv files `paths`; returns the page's path"""
+def page(paths: Sequence[str], out: str, provenance: str = "") -> str:
+    """OUT/tether.md and OUT/tether.png from the tether.csv files `paths`; `provenance` (what `divcoll tether` passes:
+    the run file, command, commit and machine) replaces the line naming the tables; returns the page's path"""
     pops, table, envs = summarise(paths)
     os.makedirs(out, exist_ok=True)
     rel = [os.path.relpath(p) for p in paths]
-    lines = ["# What the tether does to each agent of a pair", "",
-             f"`/usr/bin/python3 -m divcoll_post.tether {' '.join(rel)} --out {os.path.relpath(out)}`, from the "
-             f"`divcoll tether` tables of populations {', '.join(pops)} (each population's page beside this one names "
-             "its run file, command, commit and machine).", "",
-             "Against the free tether on the same pairs (no springs: each agent walks as alone from its place in the "
-             "pair), BL over the episode: the pair, its slower agent (less travel under the free tether) and its "
-             "faster one. *Push*: the tether's net horizontal impulse on the slower agent as a share of the force "
-             "its springs exerted (∫|f|dt); the faster agent gets the opposite push. *Work*: what the tether's springs "
-             "did on both agents, mass·u²/s² (negative: energy taken from the agents' gaits). Mean over populations "
-             "of the per-population means over pairs, with the range of the population means in brackets.", "",
+    source = provenance or (
+        f"`/usr/bin/python3 -m divcoll_post.tether {' '.join(rel)} --out {os.path.relpath(out)}`, from the "
+        f"`divcoll tether` tables of populations {', '.join(pops)} (each population's page names its run file, "
+        "command, commit and machine).")
+    over = ("Mean over populations of the per-population means over pairs, with the range of the population means in "
+            "brackets." if len(paths) > 1 else "Means over the pairs.")
+    lines = ["# What the tether does to each agent of a pair", "", source, "",
+             "*Pair*: the pair's travel, BL over the episode. Against the free tether on the same pairs (no springs: "
+             "each agent walks as alone from its place in the pair), in BL: the pair, its slower agent (less travel "
+             "under the free tether) and its faster one. *Push*: the tether's net horizontal impulse on the slower "
+             "agent as a share of the force its springs exerted (∫|f|dt); the faster agent gets the opposite push. "
+             "*Work*: what the tether's springs "
+             "did on both agents, mass·u²/s² (negative: energy taken from the agents' gaits). " + over, "",
              "![each agent's travel against the free tether](tether.png)", ""]
     for dep, label in (("uniform", "clones (the weak uniform kind trained)"),
                        ("diverse", "diverse pairs (the weak diverse kind trained)")):
         lines += [f"## {label.capitalize()}", "",
-                  "| environment | connector | pair − free (BL) | slower agent − free (BL) | faster agent − free (BL) | "
-                  "push on the slower agent | work on the pair |", "|---|---|---|---|---|---|---|"]
+                  "| environment | connector | pair (BL) | pair − free (BL) | slower agent − free (BL) | "
+                  "faster agent − free (BL) | push on the slower agent | work on the pair |",
+                  "|---|---|---|---|---|---|---|---|"]
         for e in envs:
             for c in CONNECTORS:
                 v = table.get((e, dep, c))
                 if v is None:
                     continue
-                lines.append(f"| {e} | {c} | {cell(v['pair'], '+.2f')} | {cell(v['slower'], '+.2f')} | "
-                             f"{cell(v['faster'], '+.2f')} | {cell(100 * v['push'], '+.1f')}% | {cell(v['work'], '+.0f')} |")
+                lines.append(f"| {e} | {c} | {cell(v['travel'], '.2f')} | {cell(v['pair'], '+.2f')} | "
+                             f"{cell(v['slower'], '+.2f')} | {cell(v['faster'], '+.2f')} | "
+                             f"{cell(100 * v['push'], '+.1f')}% | {cell(v['work'], '+.0f')} |")
         lines.append("")
     figure(table, envs, os.path.join(out, "tether.png"))
     path = os.path.join(out, "tether.md")
@@ -133,12 +144,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("csv", nargs="+", help="tether.csv files of `divcoll tether` (one per population)")
     ap.add_argument("--out", required=True, help="folder for tether.md and tether.png")
+    ap.add_argument("--provenance", default="", help="the page's source line (divcoll tether passes its own)")
+    ap.add_argument("--divcoll", help="accepted for `divcoll tether`; unused")
     a = ap.parse_args(argv)
     missing = [p for p in a.csv if not os.path.isfile(p)]
     if missing:
         print(f"tether: no such file: {', '.join(missing)}")
         return 2
-    print(f"tether: wrote {page(a.csv, a.out)}")
+    print(f"tether: wrote {page(a.csv, a.out, a.provenance)}")
     return 0
 
 

@@ -1,9 +1,10 @@
-"""divcoll_post.tether: the page over populations of `divcoll tether`'s tables, on synthetic tether.csv files whose
+"""divcoll_post.tether: the page of `divcoll tether`'s tables, one population or several, on synthetic tether.csv files whose
 answers are known: each agent against the free tether of the same pair, the push as a share of the tether's force,
 episodes that did not end ok left out, and the populations' range.
 
     /usr/bin/python3 -m unittest postprocess/tests/test_tether.py"""
 import csv
+import gzip
 import os
 import sys
 import tempfile
@@ -35,7 +36,8 @@ def write_csv(path, shift):
                        posterior_travel_bl=tp, anterior_travel_bl=ta, posterior_impulse_x=push_p,
                        anterior_impulse_x=-push_p, posterior_work=-15, anterior_work=-5, force_time=100.0)
         rows += [free, trained]
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    opener = gzip.open if path.endswith(".gz") else open
+    with opener(path, "wt", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, HEADER)
         w.writeheader()
         w.writerows(rows)
@@ -44,7 +46,9 @@ def write_csv(path, shift):
 class Tether(unittest.TestCase):
     def test_each_agent_against_the_free_tether_over_populations(self):
         with tempfile.TemporaryDirectory() as d:
-            paths = [os.path.join(d, f"besteffort_seed{s}.csv") for s in (3, 4)]
+            paths = [os.path.join(d, f"besteffort_seed{s}", "tether.csv.gz") for s in (3, 4)]
+            for p in paths:
+                os.makedirs(os.path.dirname(p))
             write_csv(paths[0], 0.0)
             write_csv(paths[1], 1.0)
             one = tether.read(paths[0])[("flat", "diverse", "trained")]
@@ -58,9 +62,21 @@ class Tether(unittest.TestCase):
             page = tether.page(paths, os.path.join(d, "out"))
             with open(page, encoding="utf-8") as fh:
                 text = fh.read()
-            self.assertIn("| flat | trained | -0.50 [-0.75, -0.25] | +0.50 [+0.50, +0.50] | -1.50 [-2.00, -1.00] | "
+            self.assertIn("| flat | trained | 2.00 [1.75, 2.25] | -0.50 [-0.75, -0.25] | +0.50 [+0.50, +0.50] | -1.50 [-2.00, -1.00] | "
                           "+10.0 [+10.0, +10.0]% | -20 [-20, -20] |", text)
             self.assertTrue(os.path.getsize(os.path.join(d, "out", "tether.png")) > 1000)
+
+    def test_one_population_with_the_provenance_divcoll_tether_passes(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "tether.csv")
+            write_csv(path, 0.0)
+            self.assertEqual(tether.main([path, "--out", d, "--provenance", "Run file `r.h5`; command `divcoll tether`.",
+                                          "--divcoll", "/bin/true"]), 0)
+            with open(os.path.join(d, "tether.md"), encoding="utf-8") as fh:
+                text = fh.read()
+            self.assertIn("Run file `r.h5`; command `divcoll tether`.", text)
+            self.assertIn("Means over the pairs.", text)
+            self.assertIn("| flat | trained | 2.25 | -0.25 | +0.50 | -1.00 | +10.0% | -20 |", text)
 
     def test_a_missing_file_is_refused(self):
         self.assertEqual(tether.main(["/nonexistent/tether.csv", "--out", "/tmp/x"]), 2)

@@ -138,7 +138,7 @@ std::vector<Command> commands() {
           "tether", "what a run's tethers do to each agent of a deployed pair: impulse, work, travel against alone",
           [](CLI::App& t, TetherArgs& a) {
             t.add_option("run", a.run, "run file with a deployment")->required()->check(CLI::ExistingFile);
-            t.add_option("--out", a.out, "output folder (tether.md, tether.csv)");
+            t.add_option("--out", a.out, "output folder (tether.csv; tether.md, .png by divcoll_post.tether)");
             t.add_option("--pairs", a.pairs, "the first N deployed pairs of each deployment")->check(CLI::Range(1, 100000));
             t.add_option("--replicate", a.replicate, "trained connector replicate")->check(CLI::NonNegativeNumber);
             t.add_option("--steps", a.steps, "steps per episode (default: the run's deploy.episode_steps)")

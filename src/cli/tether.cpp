@@ -1,14 +1,16 @@
 // divcoll tether RUN.h5 --out DIR: what a run's tethers do to each agent of a deployed pair, in every environment of
 // its deployment. Per pair: the free tether (no springs: each agent as it walks alone from the same start), the
 // passive and follower references and the run's trained weak connector of the deployment's kind, each with the
-// impulse and work its springs gave each agent (collective::tether_effect). Writes tether.csv (one row per episode)
-// and tether.md (means per environment, deployment and connector).
+// impulse and work its springs gave each agent (collective::tether_effect). Writes tether.csv (one row per episode),
+// then runs divcoll_post.tether on it for tether.md and tether.png (the means per environment, deployment and
+// connector; the same module draws the page over several populations' tables).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <thread>
 
 #include <unistd.h>
@@ -33,38 +35,6 @@ struct TetherRow {
   collective::TetherEffect effect;
 };
 
-// the means of tether.md for one (environment, deployment, connector) against the free tether of the same pairs; the
-// slower agent of a pair is the one that travels less under the free tether
-void write_summary(std::ostream& md, const std::vector<TetherRow>& rows, const std::vector<std::string>& connectors) {
-  md << "| environment | pairs | connector | pair (BL) | pair − free (BL) | slower agent − free (BL) | faster agent − free "
-        "(BL) | impulse on the slower agent (mass·u/s) | work on the pair (mass·u²/s²) | ∫\\|f\\|dt (mass·u/s) |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|\n";
-  const size_t k = connectors.size();
-  for (size_t at = 0; at + k <= rows.size();) {
-    const std::string env = rows[at].env, dep = rows[at].deployment;
-    size_t end = at;
-    while (end < rows.size() && rows[end].env == env && rows[end].deployment == dep) end += k;
-    for (size_t c = 1; c < k; ++c) {
-      double n = 0, pair = 0, dpair = 0, dslow = 0, dfast = 0, jslow = 0, work = 0, ft = 0;
-      for (size_t r = at; r < end; r += k) {
-        const auto& f = rows[r].effect;  // the free tether's episode of this pair
-        const auto& e = rows[r + c].effect;
-        if (f.status != sim::Status::ok || e.status != sim::Status::ok) continue;
-        const int slow = f.travel_bl[0] <= f.travel_bl[1] ? 0 : 1;
-        n += 1, pair += e.pair_travel_bl, dpair += e.pair_travel_bl - f.pair_travel_bl;
-        dslow += e.travel_bl[slow] - f.travel_bl[slow], dfast += e.travel_bl[1 - slow] - f.travel_bl[1 - slow];
-        jslow += e.impulse_x[slow], work += e.work[0] + e.work[1], ft += e.force_time;
-      }
-      char line[512];
-      std::snprintf(line, sizeof line, "| %s | %s, %d | %s | %.2f | %+.2f | %+.2f | %+.2f | %+.3f | %+.3f | %.2f |\n",
-                    env.c_str(), dep.c_str(), static_cast<int>(n), connectors[c].c_str(), pair / n, dpair / n,
-                    dslow / n, dfast / n, jslow / n, work / n, ft / n);
-      md << line;
-    }
-    at = end;
-  }
-}
-
 std::string host() {
   char name[256] = {0};
   return gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string("an unnamed host");
@@ -85,9 +55,9 @@ int tether(const TetherArgs& a) {
   DIVCOLL_THROW_UNLESS(a.replicate >= 0 && a.replicate < cfg.connectors.replicates,
                        "--replicate must be in [0, " << cfg.connectors.replicates - 1 << "]");
   fs::create_directories(a.out);
-  const std::string csv_path = (fs::path(a.out) / "tether.csv").string(), md_path = (fs::path(a.out) / "tether.md").string();
-  check_output_path(csv_path, a.force, {a.run});
-  check_output_path(md_path, a.force, {a.run});
+  const std::string csv_path = (fs::path(a.out) / "tether.csv").string();
+  for (const char* name : {"tether.csv", "tether.md", "tether.png"})
+    check_output_path((fs::path(a.out) / name).string(), a.force, {a.run});
 
   std::vector<morph::Agent> agents;
   for (const auto& x : io::read_final_population(f)) agents.push_back(x.agent);
@@ -139,19 +109,20 @@ int tether(const TetherArgs& a) {
         << e.travel_bl[1] << ',' << e.impulse_x[0] << ',' << e.impulse_x[1] << ',' << e.work[0] << ',' << e.work[1]
         << ',' << e.force_time << '\n';
   }
-  std::ofstream md(md_path);
-  md << "# What the tether does to each agent of a pair\n\n"
-     << "Run file `" << a.run << "` (commit " << f.read_string("git_commit") << "); command `divcoll tether " << a.run
-     << " --pairs " << a.pairs << " --replicate " << a.replicate << "`, divcoll " << DIVCOLL_VERSION << " ("
-     << git_commit() << ") on " << host() << ", one core of " << std::thread::hardware_concurrency() << ".\n\n"
-     << "The first " << a.pairs << " deployed pairs of each deployment (uniform: clones; diverse: the deploy stage's "
-     << "pairs), " << steps << " steps, the weak connector kind of the deployment (replicate " << a.replicate
-     << ") beside the passive and follower references. Differences are against the free tether (stiffness 0: each "
-     << "agent as it walks alone from the same start). The slower agent of a pair is the one that travels less under "
-     << "the free tether; the impulse is the tether's horizontal push on it (the faster agent gets its negative). "
-     << "Work is what the tether's springs did on both agents (positive: energy the actuated springs put in).\n\n";
-  write_summary(md, rows, names);
-  std::printf("tether: wrote %s and %s\n", md_path.c_str(), csv_path.c_str());
+  csv.close();
+  DIVCOLL_THROW_UNLESS(csv, "cannot write " << csv_path);
+  std::ostringstream prov;
+  prov << "Run file `" << a.run << "` (commit " << f.read_string("git_commit") << "); command `divcoll tether " << a.run
+       << " --pairs " << a.pairs << " --replicate " << a.replicate
+       << (a.steps > 0 ? " --steps " + std::to_string(steps) : std::string()) << "`, divcoll " << DIVCOLL_VERSION
+       << " (" << git_commit() << ") on " << host() << ", one core of "
+       << std::thread::hardware_concurrency() << ". The first " << a.pairs << " deployed pairs of each deployment "
+       << "(uniform: clones; diverse: the deploy stage's pairs), " << steps << " steps, the weak connector kind of the "
+       << "deployment (replicate " << a.replicate << ") beside the passive and follower references.";
+  std::printf("tether: wrote %s\n", csv_path.c_str());
+  std::fflush(stdout);
+  const int rc = run_python("divcoll_post.tether", {csv_path, "--out", a.out, "--provenance", prov.str()});
+  DIVCOLL_THROW_UNLESS(rc == 0, "the page of " << csv_path << " failed (divcoll_post.tether exit " << rc << ")");
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <string>
 #include <sys/wait.h>
@@ -444,6 +445,26 @@ TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   EXPECT_NE(g.read_string("derived_from").find("run.h5"), std::string::npos);
   EXPECT_TRUE(g.has_attribute("base_git_commit")) << "the earlier stages' commit is kept";
   EXPECT_EQ(g.read_string("git_commit"), git_commit()) << "the new stages' commit is this build's";
+
+  // tether: one row per (environment, deployment, pair, tether), then the page drawn from that table by
+  // divcoll_post.tether, naming the command; an existing table is not overwritten without --force
+  const Exec t = run("tether " + path("run.h5") + " --pairs 2 --steps 50 --out " + path("tether"));
+  ASSERT_EQ(t.code, 0) << t.out;
+  std::ifstream csv(path("tether/tether.csv"));
+  std::string line;
+  int lines = 0, free_rows = 0;
+  while (std::getline(csv, line)) lines += 1, free_rows += line.find(",free,") != std::string::npos;
+  EXPECT_EQ(lines, 1 + static_cast<int>(E) * 2 * 2 * 4);
+  EXPECT_EQ(free_rows, static_cast<int>(E) * 2 * 2);
+  std::ifstream md(path("tether/tether.md"));
+  const std::string page((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(page.find("command `divcoll tether " + path("run.h5") + " --pairs 2 --replicate 0 --steps 50`"),
+            std::string::npos) << page;
+  EXPECT_NE(page.find("| flat | trained |"), std::string::npos) << page;
+  EXPECT_TRUE(fs::is_regular_file(path("tether/tether.png")));
+  const Exec again = run("tether " + path("run.h5") + " --pairs 1 --steps 50 --out " + path("tether"));
+  EXPECT_EQ(again.code, 2) << again.out;
+  EXPECT_NE(again.out.find("--force"), std::string::npos) << again.out;
 }
 
 }  // namespace
