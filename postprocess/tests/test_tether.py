@@ -1,5 +1,5 @@
-"""divcoll_post.tether: the page of `divcoll tether`'s tables, one population or several, on synthetic tether.csv files whose
-answers are known: each agent against the free tether of the same pair, the push as a share of the tether's force,
+"""divcoll_post.tether: the page of `divcoll tether`'s tables, one population or several, on synthetic tether.csv
+files whose answers are known: each agent against the free tether of the same pair, the push as a share of the tether's force,
 episodes that did not end ok left out, and the populations' range.
 
     /usr/bin/python3 -m unittest postprocess/tests/test_tether.py"""
@@ -62,7 +62,8 @@ class Tether(unittest.TestCase):
             page = tether.page(paths, os.path.join(d, "out"))
             with open(page, encoding="utf-8") as fh:
                 text = fh.read()
-            self.assertIn("| flat | trained | 2.00 [1.75, 2.25] | -0.50 [-0.75, -0.25] | +0.50 [+0.50, +0.50] | -1.50 [-2.00, -1.00] | "
+            self.assertIn("| flat | trained | 2.00 [1.75, 2.25] | -0.50 [-0.75, -0.25] | +0.50 [+0.50, +0.50] | "
+                          "-1.50 [-2.00, -1.00] | "
                           "+10.0 [+10.0, +10.0]% | -20 [-20, -20] |", text)
             self.assertTrue(os.path.getsize(os.path.join(d, "out", "tether.png")) > 1000)
 
@@ -70,11 +71,11 @@ class Tether(unittest.TestCase):
         with tempfile.TemporaryDirectory() as d:
             path = os.path.join(d, "tether.csv")
             write_csv(path, 0.0)
-            self.assertEqual(tether.main([path, "--out", d, "--provenance", "Run file `r.h5`; command `divcoll tether`.",
-                                          "--divcoll", "/bin/true"]), 0)
+            prov = "Run file `r.h5`; command `divcoll tether`."
+            self.assertEqual(tether.main([path, "--out", d, "--provenance", prov, "--divcoll", "/bin/true"]), 0)
             with open(os.path.join(d, "tether.md"), encoding="utf-8") as fh:
                 text = fh.read()
-            self.assertIn("Run file `r.h5`; command `divcoll tether`.", text)
+            self.assertIn(prov, text)
             self.assertIn("Means over the pairs.", text)
             self.assertIn("| flat | trained | 2.25 | -0.25 | +0.50 | -1.00 | +10.0% | -20 |", text)
 
