@@ -1,6 +1,6 @@
 """divcoll_post.tether: the page of `divcoll tether`'s tables, one population or several, on synthetic tether.csv
-files whose answers are known: each agent against the free tether of the same pair, the push as a share of the tether's force,
-episodes that did not end ok left out, and the populations' range.
+files whose answers are known: each agent against the free tether of the same pair, the push as a share of the
+tether's force, episodes that did not end ok left out, and the populations' range.
 
     /usr/bin/python3 -m unittest postprocess/tests/test_tether.py"""
 import csv
