@@ -8,21 +8,25 @@
 
 namespace divcoll::collective {
 
-std::vector<double> follower_connector_params(double amplitude) {
+std::vector<double> follower_connector_params(double amplitude, bool joint) {
   DIVCOLL_THROW_UNLESS(amplitude > 0, "the follower connector needs connectors.amplitude > 0, got " << amplitude);
-  const nn::Layout L = nn::connector_layout();
-  const int in = L.sizes[0], h1 = L.sizes[1];
+  const nn::Layout L = joint ? nn::joint_connector_layout() : nn::connector_layout();
+  const int in = L.sizes[0], h1 = L.sizes[1], h2 = L.sizes[2];
   std::vector<double> p(L.param_count(), 0.0);
-  p[L.weight_offset(0) + 0 * in + (in - 1)] = 1.0;  // W1[0][ℓ/L]: the last input is the spring's ℓ/L
-  p[L.bias_offset(0) + 0] = -1.0;                   // b1[0]: h1₀ = tanh(ℓ/L − 1)
-  p[L.weight_offset(1) + 0 * h1 + 0] = 1.0;         // W2[0][0]: h2₀ = tanh(h1₀)
-  p[L.weight_offset(2) + 0] = 1.0 / amplitude;      // W3[0][0]: net = h2₀ / a
+  for (int r = 0; r < L.out(); ++r) {  // output r: spring r (one output, spring 0, per spring)
+    const int l = sim::kConnectorInputs * r + sim::kConnectorInputs - 1;  // the spring's ℓ/L, last of its inputs
+    p[L.weight_offset(0) + r * in + l] = 1.0;       // W1[r][ℓ/L]
+    p[L.bias_offset(0) + r] = -1.0;                 // b1[r]: h1ᵣ = tanh(ℓ/L − 1)
+    p[L.weight_offset(1) + r * h1 + r] = 1.0;       // W2[r][r]: h2ᵣ = tanh(h1ᵣ)
+    p[L.weight_offset(2) + r * h2 + r] = 1.0 / amplitude;  // W3[r][r]: net = h2ᵣ / a
+  }
   return p;
 }
 
 std::vector<double> initial_connector_params(const config::RunConfig::Connectors& connectors, double amplitude, Rng& rng) {
-  if (connectors.init != "follower") return morph::init_connector_params(rng, connectors.init_out_gain);
-  std::vector<double> w = follower_connector_params(amplitude);
+  const bool joint = connectors.network == "joint";
+  if (connectors.init != "follower") return morph::init_connector_params(rng, connectors.init_out_gain, joint);
+  std::vector<double> w = follower_connector_params(amplitude, joint);
   for (double& x : w) x += connectors.init_noise * normal(rng);
   return w;
 }

@@ -30,12 +30,15 @@ inline constexpr std::array<std::string_view, 3> kReferenceConnectors = {"free",
 // the follower policy in the connector network's layout (11 → 32 → 32 → 1, SPEC §6.3; nn::connector_layout):
 // h1₀ = tanh(ℓ/L − 1), h2₀ = tanh(h1₀), net = h2₀ / amplitude, every other weight and bias 0. Its four non-zero
 // values are W1[0][10] = 1 (input 10 is ℓ/L), b1[0] = −1, W2[0][0] = 1 and W3[0][0] = 1/amplitude, so near rest
-// length out = tanh(net) ≈ (ℓ/L − 1)/a and the spring's target L·(1 + a·out) ≈ ℓ. amplitude must be > 0
-std::vector<double> follower_connector_params(double amplitude);
+// length out = tanh(net) ≈ (ℓ/L − 1)/a and the spring's target L·(1 + a·out) ≈ ℓ. amplitude must be > 0.
+// joint: the same policy in the joint network (55 → 32 → 32 → 5, nn::joint_connector_layout): spring r's output reads
+// input 11r + 10 through hidden units r of both layers, 20 non-zero values; it drives every spring as the per-spring
+// follower does, bit for bit (tests/collective/references_test.cpp)
+std::vector<double> follower_connector_params(double amplitude, bool joint = false);
 
-// the weights a connector's training starts from (connectors.init): random = morph::init_connector_params with
-// connectors.init_out_gain; follower = follower_connector_params(amplitude) plus N(0, init_noise²) per weight, drawn
-// in storage order from `rng`
+// the weights a connector's training starts from (connectors.init), in the network of connectors.network: random =
+// morph::init_connector_params with connectors.init_out_gain; follower = follower_connector_params(amplitude) plus
+// N(0, init_noise²) per weight, drawn in storage order from `rng`
 std::vector<double> initial_connector_params(const config::RunConfig::Connectors& connectors, double amplitude, Rng& rng);
 
 // reference `name` (one of kReferenceConnectors) built from the [connectors] section

@@ -251,6 +251,13 @@ const std::vector<Key>& schema() {
              "init_noise²) on every weight, a reading of the paper's \"random neural controller\" that starts "
              "training where a tether pulls little",
              DIVCOLL_FIELD(connectors.init)),
+        pick("connectors", "network", T::Choice, "\"per_spring\"", {"per_spring", "joint"},
+             "the network of a connector's controller: per_spring = SPEC §6.3's 11 → 32 → 32 → 1, one weight set "
+             "applied to each of the five springs on its own inputs (1473 weights); joint = one 55 → 32 → 32 → 5 "
+             "network per connector that reads all five springs' inputs and drives all five (3013 weights), the "
+             "other reading of the paper's \"a neural controller\". The joint network has one hidden state per "
+             "connector, not per spring, so the analysis stage (SPEC §8.2) cannot run on it",
+             DIVCOLL_FIELD(connectors.network)),
         num("connectors", "init_noise", T::Double, "0.01", "[0, 10]", "",
             "init = follower: standard deviation of the Gaussian noise added to every weight of the follower "
             "policy (drawn from the connector's own stream, as the random init)", DIVCOLL_FIELD(connectors.init_noise)),
@@ -795,6 +802,9 @@ void check_combinations(const RunConfig& c) {
                        "connectors.clip = per_pair clips each pair's gradient, but connectors.optimizer = "
                            << c.connectors.optimizer << " uses no gradient (set clip = \"global\" or a gradient "
                            << "optimizer: adam, normalized)");
+  DIVCOLL_THROW_UNLESS(c.connectors.network != "joint" || !stage_enabled(c, "analysis"),
+                       "connectors.network = joint has one hidden state per connector, but the analysis stage reads "
+                       "one per connector spring (SPEC §8.2): leave \"analysis\" out of run.stages");
   // uniform batches and deployments pair agent i with its clone, i < count
   const auto& kinds = c.connectors.kinds;
   if (stage_enabled(c, "connectors") && (listed(kinds, "weak_uniform") || listed(kinds, "strong_uniform"))) {

@@ -67,6 +67,7 @@ struct RunConfig {
     std::string clip;                // global | per_pair: what clip_norm clips (the batch mean or each pair's gradient)
     double init_out_gain{};          // init gain of the connector network's output layer
     std::string init;                // random | follower: the weights training starts from
+    std::string network;             // per_spring | joint: the connector's network (sim::connector_param_count)
     double init_noise{};             // init = follower: sd of the noise on every weight
     std::vector<std::string> kinds;  // from weak_uniform weak_diverse strong_uniform strong_diverse
     std::string lr_schedule;         // constant | cosine | exponential (src/evo/connector_opt.hpp)

@@ -44,7 +44,6 @@ std::string join(const std::vector<std::string>& v, const std::string& sep = ","
 }
 
 std::vector<Axis> make_axes() {
-  const auto cw = static_cast<hsize_t>(sim::connector_param_count());
   const auto fixed = [](std::string name, std::string labels, std::string doc) {
     const auto n = static_cast<hsize_t>(split(labels).size());
     return Axis{std::move(name), Labels::fixed, std::move(labels), n, std::move(doc)};
@@ -74,7 +73,9 @@ std::vector<Axis> make_axes() {
       {"sample", Labels::none, "", 0, "a sampled (step, connector spring) of an episode: ⌈`deploy.hidden_subsample` / pairs⌉"},
       {"state", Labels::none, "", 0, "a hidden state in the PaCMAP fit: training states first, then novel; NaN padded to 2 · `analysis.max_states`"},
       {"agent_weight", Labels::none, "", 0, "a weight of the agent's controller (54 → 32 → 32 → 21: 3509, W then b per layer)"},
-      {"connector_weight", Labels::none, "", cw, "a weight of a connector's controller (11 → 32 → 32 → 1, W then b per layer)"},
+      {"connector_weight", Labels::none, "", static_cast<hsize_t>(sim::connector_param_count()),
+       "a weight of a connector's controller, W then b per layer: 11 → 32 → 32 → 1 (connectors.network = per_spring), "
+       "or 55 → 32 → 32 → 5 (joint)", static_cast<hsize_t>(sim::connector_param_count(true))},
       {"mass", Labels::none, "", static_cast<hsize_t>(sim::kAgentMasses), "a point mass of an agent"},
       {"spring", Labels::none, "", static_cast<hsize_t>(sim::kAgentSprings), "a spring of an agent"},
       {"neuron", Labels::none, "", static_cast<hsize_t>(sim::kHidden), "a unit of the connector's second hidden layer"},
@@ -372,9 +373,8 @@ std::vector<std::string> disagreements(const h5::Node& root, const Entry& e, con
       out.push_back(path + ": axis " + names[k] + " is not in the axes table");
       continue;
     }
-    if (a->length > 0 && dims[k] != a->length)
-      out.push_back(path + ": axis " + a->name + " has length " + std::to_string(dims[k]) + ", always " +
-                    std::to_string(a->length));
+    if (!a->fits(dims[k]))
+      out.push_back(path + ": axis " + a->name + " has length " + std::to_string(dims[k]) + ", always " + a->lengths());
     if (labelled(*a, path)) {
       const auto labels = split(labels_for(root, *a, path));
       if (labels.size() != dims[k])
@@ -425,6 +425,10 @@ std::string dtype_name(hid_t dataset) {
 }
 
 }  // namespace
+
+std::string Axis::lengths() const {
+  return std::to_string(length) + (alt_length > 0 ? " or " + std::to_string(alt_length) : std::string());
+}
 
 std::vector<std::string> Entry::axis_names() const { return split(axes); }
 
@@ -500,8 +504,7 @@ Layout layout(const h5::Node& root, const std::string& path, std::string_view ex
   if (out.axes != want || out.dims.size() != want.size()) fail("the axes (" + std::string(expected_axes) + ")");
   for (size_t k = 0; k < want.size(); ++k) {
     const Axis* a = find_axis(want[k]);
-    if (a && a->length > 0 && out.dims[k] != a->length)
-      fail(want[k] + " = " + std::to_string(a->length) + " (axis " + std::to_string(k) + ")");
+    if (a && !a->fits(out.dims[k])) fail(want[k] + " = " + a->lengths() + " (axis " + std::to_string(k) + ")");
   }
   return out;
 }
@@ -589,7 +592,7 @@ std::string markdown() {
     if (a.labels == Labels::fixed) labels = "`" + join(split(a.source), "`, `") + "`";
     if (a.labels == Labels::attribute) labels = "attribute `" + a.source + "` of the enclosing group";
     if (a.labels == Labels::dataset) labels = "dataset `" + a.source + "` of the enclosing group";
-    out += "| `" + a.name + "` | " + (a.length > 0 ? std::to_string(a.length) : "run") + " | " + labels + " | " +
+    out += "| `" + a.name + "` | " + (a.length > 0 ? a.lengths() : "run") + " | " + labels + " | " +
            a.doc + " |\n";
   }
   out +=

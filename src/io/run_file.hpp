@@ -39,6 +39,10 @@ struct Axis {
   std::string source;
   hsize_t length = 0;  // > 0: the same in every run (fixed labels: their count); 0: set by the run
   std::string doc;
+  hsize_t alt_length = 0;  // > 0: the one other length a fixed axis may have (the joint connector network's weights)
+  bool fits(hsize_t n) const { return length == 0 || n == length || (alt_length > 0 && n == alt_length); }
+  // "1473", or "1473 or 3013"
+  std::string lengths() const;
 };
 
 // one group or dataset

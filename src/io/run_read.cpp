@@ -77,11 +77,13 @@ std::vector<evo::Individual> read_final_population(const h5::Node& file, const s
 }
 
 std::vector<std::vector<double>> split_weights(const std::vector<double>& flat, size_t rows) {
-  const size_t Pc = static_cast<size_t>(sim::connector_param_count());
-  DIVCOLL_THROW_UNLESS(flat.size() == rows * Pc, "connector weights: " << flat.size() << " values are not " << rows
-                                                                       << " rows of " << Pc);
+  const size_t Pc = static_cast<size_t>(sim::connector_param_count()), Pj = sim::connector_param_count(true);
+  DIVCOLL_THROW_UNLESS(rows > 0 && (flat.size() == rows * Pc || flat.size() == rows * Pj),
+                       "connector weights: " << flat.size() << " values are not " << rows << " rows of " << Pc
+                                             << " (or " << Pj << ", the joint network)");
+  const size_t n = flat.size() / rows;
   std::vector<std::vector<double>> out;
-  for (size_t r = 0; r < rows; ++r) out.emplace_back(flat.begin() + r * Pc, flat.begin() + (r + 1) * Pc);
+  for (size_t r = 0; r < rows; ++r) out.emplace_back(flat.begin() + r * n, flat.begin() + (r + 1) * n);
   return out;
 }
 

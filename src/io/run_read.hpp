@@ -37,7 +37,8 @@ std::vector<evo::Individual> read_pool(const h5::Node& file, const std::string& 
 std::vector<evo::Individual> read_final_population(const h5::Node& file, const std::string& group = "agents");
 
 // the weights layout of trained connectors: one row of P_c = sim::connector_param_count() values per
-// replicate, rows × P_c in the run file (`<group>/params`)
+// replicate (sim::connector_param_count(true) with connectors.network = joint), rows × P_c in the run file
+// (`<group>/params`)
 std::vector<std::vector<double>> split_weights(const std::vector<double>& flat, size_t rows);
 std::vector<double> join_weights(const std::vector<std::vector<double>>& rows);
 // `<group>/params` with the layout the file gives it (run_file::layout: its axes must be replicate,

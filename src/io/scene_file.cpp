@@ -103,7 +103,10 @@ sim::Scene read_scene(const std::string& path) {
   const size_t C = rows_of(f, "connectors/spring_index", sim::kConnectorSprings, "C");
   s.connector_spring_index = f.read<int32_t>("connectors/spring_index", Dims{h5::extent(C), sim::kConnectorSprings});
   if (C > 0) {
-    s.connector_params = f.read<double>("connector_params", Dims{h5::extent(sim::connector_param_count())});
+    // the connector network is what the count of its weights says (sim::connector_param_count): per spring, or joint
+    const bool joint = f.has("connector_params") &&
+                       f.dims("connector_params") == Dims{h5::extent(sim::connector_param_count(true))};
+    s.connector_params = f.read<double>("connector_params", Dims{h5::extent(sim::connector_param_count(joint))});
   } else {
     DIVCOLL_THROW_UNLESS(
         !f.has("connector_params"),

@@ -375,8 +375,9 @@ std::vector<double> init_agent_params(Rng& rng, int n_inputs) {
   return init_mlp(nn::agent_layout(n_inputs), kAgentInitGains, rng);
 }
 
-std::vector<double> init_connector_params(Rng& rng, double out_gain) {
-  return init_mlp(nn::connector_layout(), {kConnectorInitGains[0], kConnectorInitGains[1], out_gain}, rng);
+std::vector<double> init_connector_params(Rng& rng, double out_gain, bool joint) {
+  return init_mlp(joint ? nn::joint_connector_layout() : nn::connector_layout(),
+                  {kConnectorInitGains[0], kConnectorInitGains[1], out_gain}, rng);
 }
 
 }  // namespace divcoll::morph

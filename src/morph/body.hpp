@@ -115,10 +115,10 @@ inline constexpr std::array<double, 3> kConnectorInitGains = {2.0, 2.0, 3.0};
 
 // n_inputs → 32 → 32 → 21 (3509 values with 54 inputs)
 std::vector<double> init_agent_params(Rng& rng, int n_inputs = 54);
-// 11 → 32 → 32 → 1 (1473 values)
+// 11 → 32 → 32 → 1 (1473 values), or with joint the network that reads all five springs, 55 → 32 → 32 → 5 (3013)
 // out_gain: the gain of the output layer (the first two keep 2, 2): a run's connectors.init_out_gain (the schema's
 // default 0.1 starts the connector nearly passive); kConnectorInitGains[2] = 3, the agent's, for the random connectors
 // of the scene, simulate and bench commands
-std::vector<double> init_connector_params(Rng& rng, double out_gain);
+std::vector<double> init_connector_params(Rng& rng, double out_gain, bool joint = false);
 
 }  // namespace divcoll::morph

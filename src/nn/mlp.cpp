@@ -58,6 +58,7 @@ int Layout::scratch_count() const { return 2 * *std::max_element(sizes.begin(), 
 
 Layout agent_layout(int n_inputs) { return Layout{{n_inputs, 32, 32, 21}}; }
 Layout connector_layout() { return Layout{{11, 32, 32, 1}}; }
+Layout joint_connector_layout() { return Layout{{55, 32, 32, 5}}; }
 
 namespace {
 

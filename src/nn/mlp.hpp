@@ -36,6 +36,7 @@ struct Layout {
 
 Layout agent_layout(int n_inputs);  // n_inputs → 32 → 32 → 21
 Layout connector_layout();          // 11 → 32 → 32 → 1
+Layout joint_connector_layout();    // 55 → 32 → 32 → 5: one network reading all five springs of a connector
 
 // The kernels below are templates on the scalar T, instantiated for double (the engine's precision, SPEC §10)
 // and float (a float path's building block: the same algorithms with twice the lanes per vector, a tanh of its

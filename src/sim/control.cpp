@@ -1,7 +1,8 @@
 // stage: the controllers (SPEC §2.1, §4.3, §6.3) and their adjoint
 //
 // agents: 54 inputs (10 sines, then per mass (x − c)κ_a and v κ_a), one network per agent, o ← α y + (1−α) o
-// connectors: 11 inputs per spring, one weight set for all 5·C connector springs (a single GEMM)
+// connectors: 11 inputs per spring, one weight set for all 5·C connector springs (a single GEMM); or, with the
+// joint network (Model::conn_joint), the same 11·5 inputs of a connector as one column of a 55 → 32 → 32 → 5 network
 // T: the networks' scalar (stages.hpp). The inputs are computed in double and stored as T; the outputs are read
 // as T and enter o in double. With T = double this is the spec's step, operation for operation.
 #include <algorithm>
@@ -90,8 +91,8 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
       col[10] = std::sqrt(dx * dx + dy * dy + eps2) / sc.rest_length[s];
     }
   }
-  nn::forward_packed(m.conn_layout, m.conn_packed_for<T>(), cols, buf.conn_acts);
-  const T* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * cols;
+  nn::forward_packed(m.conn_layout, m.conn_packed_for<T>(), m.conn_cols, buf.conn_acts);
+  const T* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * m.conn_cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
     o[s] = k.conn_alpha * y[c] + (1.0 - k.conn_alpha) * o[s];
@@ -99,9 +100,9 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
 }
 
 size_t control_scratch_count(const Model& m) {
-  const size_t cols = kConnectorSprings * static_cast<size_t>(m.C);
+  const size_t cols = static_cast<size_t>(m.conn_cols);
   const size_t agent = m.agent_layout.in() + m.agent_layout.scratch_count();
-  const size_t conn = cols * (1 + kConnectorInputs + m.conn_layout.scratch_count());
+  const size_t conn = cols * (m.conn_layout.out() + m.conn_layout.in() + m.conn_layout.scratch_count());
   return std::max(agent, conn);
 }
 
@@ -152,15 +153,15 @@ void control_adjoint(const Model& m, int /*t*/, const double* x, const double* v
   const double kx = k.conn_kappa_x, kv = k.conn_kappa_v;
   const double eps2 = k.eps_len * k.eps_len;
   const double ac = k.conn_alpha;
-  T* yb = scratch;                                  // 1 × cols
-  T* in_grad = scratch + cols;                      // 11 × cols
+  T* yb = scratch;                                  // 1 × cols (5 × C joint: the same values)
+  T* in_grad = scratch + cols;                      // 11 × cols (55 × C joint)
   T* nn_scratch = in_grad + static_cast<size_t>(kConnectorInputs) * cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
     yb[c] = ac * ob[s];
     ob[s] *= (1.0 - ac);
   }
-  nn::backward_packed(m.conn_layout, m.conn_packed_for<T>(), cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
+  nn::backward_packed(m.conn_layout, m.conn_packed_for<T>(), m.conn_cols, buf.conn_acts, yb, g_conn, in_grad, nn_scratch);
   for (int c = 0; c < m.C; ++c) {
     double mbx = 0, mby = 0;
     for (int r = 0; r < kConnectorSprings; ++r) {

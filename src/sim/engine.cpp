@@ -65,7 +65,7 @@ struct Simulator::Impl {
     }
     fit(os, (steps_kept + 1) * m.S);
     const size_t n_agent_acts = steps_kept * m.A * m.agent_layout.activation_count();
-    const size_t n_conn_acts = steps_kept * m.conn_layout.activation_count() * kConnectorSprings * m.C;
+    const size_t n_conn_acts = steps_kept * m.conn_layout.activation_count() * m.conn_cols;
     if (opt.float_networks) {
       fit(agent_acts_f, n_agent_acts);
       fit(conn_acts_f, n_conn_acts);
@@ -173,7 +173,7 @@ struct Simulator::Impl::Episode {
   Episode(const Scene& scene, const RunOptions& options, Model& model)
       : sc(scene), opt(options), m(model), fl(options.float_networks), T(options.steps), n(model.substeps),
         N(model.N), S(model.S), N2(2 * static_cast<size_t>(model.N)), na(model.agent_layout.activation_count()),
-        nc(model.conn_layout.activation_count() * kConnectorSprings * model.C), cols(kConnectorSprings * model.C) {}
+        nc(model.conn_layout.activation_count() * model.conn_cols), cols(kConnectorSprings * model.C) {}
   const Scene& sc;
   const RunOptions& opt;
   Model& m;
@@ -225,6 +225,9 @@ Simulator::Impl::Episode Simulator::Impl::begin(const Scene& sc, const RunOption
   validate(sc, ValidateOptions{.finite_params = false});
   DIVCOLL_THROW_UNLESS(opt.steps >= 1, "steps must be at least 1 (got " << opt.steps << ")");
   DIVCOLL_THROW_UNLESS(opt.hidden_every >= 1, "hidden_every must be at least 1 (got " << opt.hidden_every << ")");
+  DIVCOLL_THROW_UNLESS(!opt.record_hidden || !joint_connector_params(sc.connector_params.size()),
+                       "record_hidden keeps a hidden state per connector spring (SPEC §8.2), but the scene's joint "
+                       "connector network has one per connector");
 
   // substeps: from the stability rule, or as the scene file demands if that is enough
   const int needed = substeps_needed(sc);

@@ -38,6 +38,12 @@ struct Model {
   // controllers
   nn::Layout agent_layout, conn_layout;
   int agent_params = 0, conn_params = 0;
+  // the connector network (sim::connector_param_count): per spring (conn_layout 11 → 32 → 32 → 1 on conn_cols =
+  // 5·C columns, one per spring) or joint (55 → 32 → 32 → 5 on conn_cols = C columns, one per connector). Both
+  // read the same input block (11 values per spring, springs in order, connectors in order) and write the same
+  // outputs (one per spring, in that order): only the network's columns differ
+  bool conn_joint = false;
+  int conn_cols = 0;
   // the controllers' weights packed for the MLP kernels (nn::pack): A × nn::packed_count(agent_layout), and
   // nn::packed_count(conn_layout) for the connectors' shared weights
   int agent_packed_count = 0;

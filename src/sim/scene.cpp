@@ -141,7 +141,11 @@ int agent_input_size(const Constants& c) { return c.n_sines + 4 * kAgentMasses; 
 
 int agent_param_count(const Constants& c) { return mlp_param_count(agent_input_size(c), kAgentOutputs); }
 
-int connector_param_count() { return mlp_param_count(kConnectorInputs, kConnectorOutputs); }
+int connector_param_count(bool joint) {
+  return joint ? mlp_param_count(kConnectorSprings * kConnectorInputs, kConnectorSprings)
+               : mlp_param_count(kConnectorInputs, kConnectorOutputs);
+}
+bool joint_connector_params(size_t count) { return count == static_cast<size_t>(connector_param_count(true)); }
 
 void validate(const Scene& s) { validate(s, ValidateOptions{}); }
 
@@ -176,8 +180,10 @@ void validate(const Scene& s, const ValidateOptions& opt) {
                                                       << " (C x " << kConnectorSprings << ")");
   const size_t C = s.connector_spring_index.size() / kConnectorSprings;
   if (C > 0) {
-    check_size(s.connector_params.size(), static_cast<size_t>(connector_param_count()), "connector_params",
-               msg() << "P_c for the scene's " << C << " connectors");
+    const bool joint = joint_connector_params(s.connector_params.size());
+    check_size(s.connector_params.size(), static_cast<size_t>(connector_param_count(joint)), "connector_params",
+               msg() << "P_c for the scene's " << C << " connectors (" << connector_param_count(true)
+                     << " for the joint network)");
   } else {
     check_size(s.connector_params.size(), 0, "connector_params",
                "it must be empty when there are no connectors");

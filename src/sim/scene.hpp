@@ -119,7 +119,12 @@ struct Scene {
 int agent_input_size(const Constants& c);        // n_sines + 4 * 11
 int agent_param_count(const Constants& c);       // 3509 with the defaults
 inline constexpr int kConnectorInputs = 11;
-int connector_param_count();                     // 1473
+// the connector network (connectors.network): per spring = SPEC §6.3's 11 → 32 → 32 → 1 applied to each of the five
+// springs (1473 weights); joint = one 55 → 32 → 32 → 5 network per connector that reads the five springs' inputs in
+// spring order and drives the five springs (3013 weights). A scene's connector_params say which: their count.
+int connector_param_count(bool joint = false);   // 1473, or 3013 joint
+// connector_params of a scene hold the joint network (their count is connector_param_count(true))
+bool joint_connector_params(size_t count);
 
 // checks every structural and numerical invariant of a scene (shapes, index ranges, finite values,
 // sorted terrain with segments at least 0.01 u wide, positive masses and rest lengths ...).

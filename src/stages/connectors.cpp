@@ -77,7 +77,8 @@ class LockstepPlan : public ConnectorsPlan {
                const std::vector<ConnectorSlot>& slots, const TrainSpec& spec)
       : def_(def), agents_(agents), slots_(slots), spec_(spec), groups_(slot_groups(slots)),
         slot_count_(static_cast<int>(slots.size())), batch_pairs_(spec.batch_pairs), iterations_(spec.iterations),
-        population_(static_cast<int>(agents.size())), params_per_connector_(sim::connector_param_count()), state_prefix_(spec.state_group + "/state/") {}
+        population_(static_cast<int>(agents.size())), params_per_connector_(sim::connector_param_count(def.connectors.network == "joint")),
+        state_prefix_(spec.state_group + "/state/") {}
 
   Info info() const override { return {spec_.label, spec_.state_group, "iterations_done", "iteration", "pair-episodes"}; }
   int rounds() const override { return iterations_; }

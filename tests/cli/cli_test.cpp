@@ -110,6 +110,8 @@ TEST_F(Cli, BadInputIsRefusedWithAMessageAndNonZeroExit) {
       {"run " + testing::source_dir() + "/configs/tiny.toml scaling.draws=50 --out " + path("r.h5"), "scaling.draws"},
       {"run " + testing::source_dir() + "/configs/tiny.toml run.stages=agents,dance --out " + path("r.h5"), "dance"},
       {"run " + testing::source_dir() + "/configs/tiny.toml run.contact=slippy --out " + path("r.h5"), "run.contact"},
+      {"run " + testing::source_dir() + "/configs/tiny.toml connectors.network=joint --out " + path("r.h5"),
+       "connectors.network = joint has one hidden state per connector"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --resume --force --out " + path("r.h5"), "contradict"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --from deploy --out " + path("r.h5"), "--base"},
       {"run " + testing::source_dir() + "/configs/tiny.toml --from dance --base " + good + " --out " + path("r.h5"),

@@ -46,6 +46,31 @@ TEST(FollowerPolicy, FourNonZeroWeightsThatReadOnlyTheSpringsLengthRatio) {
   EXPECT_THROW(collective::follower_connector_params(0.0), InputError);
 }
 
+// the joint network (connectors.network = joint) carries the same policy in 20 non-zero weights, and a pair under it
+// moves exactly as under the per-spring follower: the joint network computes what the per-spring one does, column
+// for column, when its weights say so
+TEST(FollowerPolicy, TheJointNetworksFollowerMovesAPairBitForBitAsThePerSpringOne) {
+  const std::vector<double> w = collective::follower_connector_params(0.6, /*joint=*/true);
+  ASSERT_EQ(static_cast<int>(w.size()), sim::connector_param_count(true));
+  int nonzero = 0;
+  for (double x : w) nonzero += x != 0.0;
+  EXPECT_EQ(nonzero, 20);
+  const config::RunConfig cfg = config::default_config();
+  const collective::Tether t = collective::tether(cfg.connectors, "weak_uniform");
+  for (uint64_t seed : {1, 2}) {
+    const morph::Agent a = testing::agent_with_anchors(seed, 77), b = testing::agent_with_anchors(seed + 10, 77);
+    sim::RunOptions opt;
+    opt.steps = 400;
+    opt.record = true;
+    const sim::RunResult per_spring = sim::simulate(
+        collective::pair_scene(a, b, collective::follower_connector_params(0.6), t, "flat", testing::kCoulomb), opt);
+    const sim::RunResult joint = sim::simulate(collective::pair_scene(a, b, w, t, "flat", testing::kCoulomb), opt);
+    ASSERT_EQ(per_spring.status, sim::Status::ok);
+    EXPECT_EQ(joint.x, per_spring.x) << "seed " << seed;
+    EXPECT_EQ(joint.travel, per_spring.travel) << "seed " << seed;
+  }
+}
+
 // the mean over steps and connector springs of |ℓ/L − (1 + a·o)|, the stretch the spring's elastic force acts on
 // (force k·L·that), for a clone pair under connector weights w: o replayed from the recorded network inputs with the
 // controller's smoothing o ← α·out + (1 − α)·o (SPEC §2 step 1; α of SPEC §6.3)
@@ -119,6 +144,16 @@ TEST(ConnectorInit, RandomIsTheSpecsInitAndFollowerIsThePolicyPlusNoise) {
   double sq = 0;
   for (size_t i = 0; i < w.size(); ++i) sq += (w[i] - f[i]) * (w[i] - f[i]);
   EXPECT_NEAR(std::sqrt(sq / w.size()), 0.01, 0.001);  // 1473 draws of N(0, 0.01²)
+  // connectors.network = joint: the same starts in the joint network's layout
+  cfg = config::apply_overrides(cfg, {"connectors.network=\"joint\"", "connectors.init_noise=0",
+                                      "run.stages=agents,connectors,deploy"});
+  Rng e = make_rng(4, 2000, 1000000);
+  EXPECT_EQ(collective::initial_connector_params(cfg.connectors, 0.6, e), collective::follower_connector_params(0.6, true));
+  cfg = config::apply_overrides(cfg, {"connectors.init=\"random\""});
+  Rng g = make_rng(4, 2000, 1000000), h = make_rng(4, 2000, 1000000);
+  const std::vector<double> j = collective::initial_connector_params(cfg.connectors, 0.6, g);
+  EXPECT_EQ(static_cast<int>(j.size()), sim::connector_param_count(true));
+  EXPECT_EQ(j, morph::init_connector_params(h, cfg.connectors.init_out_gain, true));
 }
 
 }  // namespace

@@ -178,6 +178,7 @@ TEST(ConfigSchema, KeysHaveTheAgreedNames) {
                                              "connectors.clip",
                                              "connectors.init_out_gain",
                                              "connectors.init",
+                                             "connectors.network",
                                              "connectors.init_noise",
                                              "connectors.kinds",
                                              "connectors.lr_schedule",

@@ -59,6 +59,27 @@ TEST(ConnectorsPlan, RecordsEveryIterationsCurvesTheWeightsAndTheState) {
   for (size_t q = 0; q < Pc; ++q) ASSERT_EQ(test::at(d, "connectors/weak_diverse/params").values[Pc + q], w[3][q]);
 }
 
+// connectors.network = joint: the plan trains the joint network's 3013 weights (its own random start, a step away
+// from it after the iterations), records them in the same datasets, and resumes to the same run
+TEST(ConnectorsPlan, TheJointNetworkTrainsItsOwnWeightsAndResumes) {
+  const Case c({"connectors.network=\"joint\"", "run.stages=agents,connectors,deploy"});
+  const SerialRun run = run_serial(*c.plan());
+  const test::Datasets d = test::written(run);
+  const uint64_t R = 2, Pj = sim::connector_param_count(true);
+  for (const char* kind : {"weak_uniform", "weak_diverse"}) {
+    const std::string g = std::string("connectors/") + kind;
+    EXPECT_EQ(test::at(d, g + "/params").dims, (std::vector<uint64_t>{R, Pj})) << kind;
+    for (double v : test::at(d, g + "/curve_u").values) EXPECT_TRUE(std::isfinite(v)) << g;
+  }
+  // replicate 0 of weak_uniform (connector 0) moved away from where it started
+  Rng rng = make_rng(c.cfg.run.seed, c.slots[0].stream, config::kItemInitialWeights);
+  const std::vector<double> start = collective::initial_connector_params(c.cfg.connectors, 0.6, rng);
+  const auto& trained = test::at(d, "connectors/weak_uniform/params").values;
+  ASSERT_EQ(start.size(), Pj);
+  EXPECT_NE(std::vector<double>(trained.begin(), trained.begin() + Pj), start);
+  test::expect_same(test::resumed([&] { return c.plan(); }, 2), d);
+}
+
 TEST(ConnectorsPlan, TheFirstIterationsCurveIsTheMeanOfItsPairEpisodes) {
   const Case c({});
   const auto plan = c.plan();
