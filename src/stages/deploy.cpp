@@ -50,8 +50,9 @@ class DeployPlan final : public Plan {
         K_(D_.hidden_subsample == 0 ? per_episode_ : std::min(per_episode_, (D_.hidden_subsample + NP_ - 1) / NP_)),
         early_(D_.early_step > 0), inputs_(def_.analysis.familiarity_on == "inputs") {
     // hidden states (SPEC §8.2) of the weak connectors deployed as trained, at most deploy.hidden_subsample
-    // per (type, replicate, environment): K per episode, drawn from the episode's own stream
-    for (int t = 0; t < T_; ++t)
+    // per (type, replicate, environment): K per episode, drawn from the episode's own stream. The joint network
+    // (connectors.network) has none per spring: its runs keep no hidden states (and run no analysis)
+    for (int t = 0; t < T_ && def_.connectors.network != "joint"; ++t)
       if (types_[t] == "weak_uniform@uniform" || types_[t] == "weak_diverse@diverse") hidden_types_.push_back(t);
     // the reference connectors (deploy.references), each on uniform and on diverse pairs, after the trained types
     if (D_.references)

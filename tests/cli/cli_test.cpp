@@ -217,6 +217,20 @@ namespace divcoll {
 namespace {
 
 // the stages write the datasets they promise, with the shapes mpi/README.md gives
+// connectors.network = joint through the pipeline's first three stages: 3013 weights per trained connector, every
+// deployment episode run, no hidden states kept, and the file matches the run-file schema
+TEST_F(Cli, TheJointConnectorNetworkTrainsAndDeploys) {
+  const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
+  const Exec r = run("run " + cfg + " connectors.network=joint run.stages=agents,connectors,deploy --out " + path("j.h5"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const io::h5::File f = io::h5::File::open(path("j.h5"));
+  EXPECT_EQ(f.dims("connectors/weak_diverse/params")[1], static_cast<hsize_t>(sim::connector_param_count(true)));
+  for (uint8_t st : f.read<uint8_t>("deploy/collectives/status")) EXPECT_EQ(st, 0);
+  EXPECT_FALSE(f.has("deploy/hidden"));
+  const Exec checked = run("schema --check " + path("j.h5"));
+  EXPECT_EQ(checked.code, 0) << checked.out;
+}
+
 TEST_F(Cli, RunWritesEveryPromisedDatasetOfEachImplementedStage) {
   const std::string cfg = testing::source_dir() + "/configs/tiny.toml";
   const Exec r = run("run " + cfg + " --out " + path("run.h5"));  // every stage
