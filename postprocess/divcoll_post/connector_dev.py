@@ -26,7 +26,8 @@ TIE = 0.02
 KINDS = [("weak_uniform", "weak_uniform@uniform", "follower@uniform"),
          ("weak_diverse", "weak_diverse@diverse", "follower@diverse")]
 # keys whose change alters the model (what a weak connector is), not its training: such candidates are readings (A5)
-MODEL_KEYS = ("connectors.weak_stiffness", "connectors.damping", "connectors.amplitude", "connectors.follower")
+MODEL_KEYS = (
+    "connectors.weak_stiffness", "connectors.damping", "connectors.amplitude", "connectors.follower", "connectors.network")
 
 
 @dataclasses.dataclass
