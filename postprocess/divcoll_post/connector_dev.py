@@ -204,7 +204,9 @@ def write(folder: str, out: str) -> str:
     lines += ["S = mean over populations and kinds of the kind's flat travel as trained / agents alone (A5's selection "
               "number); *of follower* the same over the follower reference's travel. Cost: pair-episodes of 1000 steps "
               "per connector (with gradient for gradient methods, forward for es and keep-best's validation), and the "
-              "connectors stage's wall time per run (2 connectors, 2 ranks, on a shared 2-core machine).", "",
+              "connectors stage's wall time per run (2 connectors, 2 ranks, on a shared 2-core machine; each run's "
+              "time is from the sitting it ran in, and runs of different sittings differ by up to several times on "
+              "this machine: compare costs by pair-episodes).", "",
               "| candidate | eligible | S (of agents alone) | of follower | per population and kind: BL (of alone) | "
               "pair-episodes | wall s | keys |", "|---|---|---|---|---|---|---|---|"]
     for c in cands:
