@@ -254,3 +254,85 @@ def write(folder: str, out: str) -> str:
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
     return path
+
+
+def curve_at(c: Candidate, kind: str, it: int, window: int = 10) -> float:
+    """the candidate's learning curve of `kind` (validation batch with keep-best, training batch otherwise; mean over
+    connectors, then over its populations) averaged over the `window` iterations up to `it` (fewer at the start; a
+    training batch's last row stands for the end); NaN when no run reaches that iteration"""
+    ys = []
+    for r in c.runs:
+        cv = r.arrays.get("connectors", {}).get("curves", {}).get(kind)
+        if not cv:
+            continue
+        y = np.nanmean(np.asarray(cv["val_bl" if "val_bl" in cv else "train_bl"], float), axis=1)
+        if len(y) >= it:  # a training batch's curve has one row per step: its last is iteration I − 1
+            at = min(it, len(y) - 1)
+            ys.append(float(np.mean(y[max(0, at - window + 1):at + 1])))
+    return float(np.mean(ys)) if ys else float("nan")
+
+
+MILESTONES = (0, 100, 250, 500, 1000)
+
+
+def write_budget(folder: str, out: str, compare: str = "") -> str:
+    """DIR/budget.md and its learning-curve figure (DIR/curves.png): amendment A5's larger budget, the same trainings
+    run ten times longer (configs/studies/connector_budget.toml); `compare`: the development study's kept folder, whose
+    runs of the same trainings at the paper's budget (the variant's name without `_1000`) the page sets beside them"""
+    os.makedirs(out, exist_ok=True)
+    man, _, _ = load(folder)
+    cands = [c for c in candidates(folder) if c.runs]
+    if not cands:
+        raise ValueError(f"{folder}: no run of the study is kept yet")
+    seeds = sorted({r.seed for c in cands for r in c.runs})
+    commits = sorted({r.summary.get("git_commit", "") for c in cands for r in c.runs} - {""})
+    iters = sorted({int(r.config.get("connectors", {}).get("iterations", 0)) for c in cands for r in c.runs})
+    lines = ["# What a larger budget buys: connector training to " + "/".join(map(str, iters)) + " iterations", "",
+             f"Study `{man.get('name', '?')}` ([configs/studies/connector_budget.toml](../../../configs/studies/"
+             "connector_budget.toml)), protocol amendment A5's larger budget (descriptive: no candidate is chosen and "
+             f"no verdict reads it): populations {', '.join(map(str, seeds))}, the two weak kinds, one connector each, "
+             "batches of 100 pairs of 1000 steps, deployed on flat for 3000 steps beside agents alone and the reference "
+             f"connectors. Run files made by divcoll {', '.join(commits) or '—'}; page by postprocess/ at "
+             f"{R.code_version()}.", ""]
+    planned = len(man.get("run", []))
+    n_runs = sum(len(c.runs) for c in cands)
+    if n_runs < planned:
+        lines += [f"**Interim**: {n_runs} of {planned} runs are in.", ""]
+    lines += ["Deployed as trained: flat travel of the kind as trained / agents alone (S: mean over populations and "
+              "kinds, as A5's selection number) and / the follower; a keep-best training deploys its best weights on "
+              "the validation pairs, the paper-faithful one its last.", "",
+              "| training | S (of agents alone) | of follower | per population and kind: BL (of alone) | pair-episodes | "
+              "wall s | keys |", "|---|---|---|---|---|---|---|"]
+    for c in cands:
+        per = "; ".join(f"{s}/{k.split('_')[1][0]}: {v['travel']:.2f} ({v['share_alone']:.0%})"
+                        for (s, k), v in sorted(c.cells().items()))
+        lines.append(f"| {c.name} | {c.S:.3f} | {c.S_follower:.2f} | {per} | {c.cost:,.0f} | {c.wall_s:.0f} | "
+                     f"{', '.join(f'`{k}`' for k in c.keys) or 'defaults'} |")
+    if compare:
+        base = {c.name: c for c in candidates(compare)}
+        rows = [(c, base.get(c.name.removesuffix("_1000"))) for c in cands]
+        rows = [(c, b) for c, b in rows if b is not None and b.runs]
+        if rows:
+            lines += ["", f"Against the same training at the paper's budget (the development study, `{compare}`; the "
+                      "same populations, agents and deployment pairs):", "",
+                      "| training | S at the paper's budget | S here | difference | of follower there → here |",
+                      "|---|---|---|---|---|"]
+            for c, b in rows:
+                lines.append(f"| {b.name} → {c.name} | {b.S:.3f} | {c.S:.3f} | {c.S - b.S:+.3f} | "
+                             f"{b.S_follower:.2f} → {c.S_follower:.2f} |")
+    marks = [m for m in MILESTONES if m <= max(iters)]
+    lines += ["", "The learning curves: a pair's travel in 1000 steps (BL), mean over the populations, averaged over "
+              "the 10 iterations up to each mark (keep-best trainings: the 32 fixed validation pairs; the others: the "
+              "training batch, a new draw of diverse pairs every iteration).", "",
+              "| training | kind | " + " | ".join(f"iteration {m}" for m in marks) + " |",
+              "|---|---|" + "---|" * len(marks)]
+    for c in cands:
+        for kind, _, _ in KINDS:
+            vals = [curve_at(c, kind, m) for m in marks]
+            lines.append(f"| {c.name} | {kind} | " + " | ".join("—" if np.isnan(v) else f"{v:.2f}" for v in vals) + " |")
+    if curves_figure(cands, os.path.join(out, "curves.png")):
+        lines += ["", "![learning curves](curves.png)", ""]
+    path = os.path.join(out, "budget.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path

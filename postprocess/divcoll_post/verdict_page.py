@@ -4,7 +4,8 @@ when inconclusive; a forest plot; Fig. 2A under both comparison protocols and Fi
 over populations. Every number comes from the `*.arrays.json` kept beside the study's run summaries.
 
     PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.verdict_page STUDY_DIR [--out DIR] [--resamples B]
-        [--readings | --states | --dev] [--readme README.md]  (postprocess/verdicts.py STUDY_DIR ... is the same)
+        [--readings | --states | --dev | --budget [--compare DEV_DIR]] [--readme README.md]
+    (postprocess/verdicts.py STUDY_DIR ... is the same)
 
 STUDY_DIR is a study folder (`divcoll study --out`) or its kept copy (postprocess/gallery/studies/NAME): the page
 reads the `*.arrays.json` beside the run summaries, which `divcoll report STUDY_DIR` writes from the run files.
@@ -13,7 +14,8 @@ STUDY_DIR/readings): each variant of the study judged as its own family beside i
 (configs/studies/verdicts_readings.toml); with --states, DIR/states.md (default STUDY_DIR/states): the analysis
 claims of one population at each variant's state count (configs/studies/verdicts_states.toml); with --dev,
 DIR/connector_dev.md (default STUDY_DIR/connector_dev): the development grid of connector training and the
-candidate amendment A5 chooses (configs/studies/connector_dev.toml, divcoll_post.connector_dev)."""
+candidate amendment A5 chooses (configs/studies/connector_dev.toml, divcoll_post.connector_dev); with --budget,
+DIR/budget.md: the same trainings to 1000 iterations (configs/studies/connector_budget.toml)."""
 
 from __future__ import annotations
 
@@ -932,11 +934,19 @@ def main(argv=None):
     ap.add_argument("--dev", action="store_true",
                     help="the development page of connector training (configs/studies/connector_dev.toml): every "
                          "candidate, its cost and the candidate amendment A5 chooses")
+    ap.add_argument("--budget", action="store_true",
+                    help="the larger-budget page (configs/studies/connector_budget.toml): learning curves to 1000 "
+                         "iterations and what they deploy to")
+    ap.add_argument("--compare", default="",
+                    help="with --budget: the development study's kept folder, for the same trainings at 100 iterations")
     a = ap.parse_args(argv)
     try:
         if a.dev:
             from . import connector_dev
             path = connector_dev.write(a.study, a.out or os.path.join(a.study, "connector_dev"))
+        elif a.budget:
+            from . import connector_dev
+            path = connector_dev.write_budget(a.study, a.out or os.path.join(a.study, "budget"), a.compare)
         elif a.states:
             path = states_page(a.study, a.out or os.path.join(a.study, "states"))
         elif a.readings:

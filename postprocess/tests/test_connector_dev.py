@@ -89,5 +89,24 @@ class Selection(unittest.TestCase):
         self.assertIn("| late | added 2026-12-06, reported only |", page)
 
 
+class Budget(unittest.TestCase):
+    def test_the_budget_page_sets_each_training_beside_its_run_at_the_papers_budget(self):
+        with tempfile.TemporaryDirectory() as d:
+            dev, budget = os.path.join(d, "dev"), os.path.join(d, "budget")
+            os.makedirs(dev)
+            os.makedirs(budget)
+            kept(dev, [("paper", [], {101: (5.0, 4.0), 102: (5.0, 4.0)}, PLAIN)])
+            kept(budget, [("paper_1000", ["connectors.iterations=1000"], {101: (6.5, 5.5), 102: (6.5, 5.5)},
+                           dict(PLAIN, iterations=1000))])
+            with open(D.write_budget(budget, os.path.join(d, "page"), compare=dev)) as fh:
+                page = fh.read()
+        # S: (0.65 + 0.55) / 2 against (0.5 + 0.4) / 2; 1000 iterations × 100 pairs
+        self.assertIn("| paper_1000 | 0.600 |", page)
+        self.assertIn("| 100,000 |", page)
+        self.assertIn("| paper → paper_1000 | 0.450 | 0.600 | +0.150 |", page)
+        # the synthetic curves hold 3 iterations (1, 2, travel / 3): iteration 0 is 1.0, later marks are not there
+        self.assertIn("| paper_1000 | weak_uniform | 1.00 | — |", page)
+
+
 if __name__ == "__main__":
     unittest.main()
