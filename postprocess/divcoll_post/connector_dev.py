@@ -27,7 +27,8 @@ KINDS = [("weak_uniform", "weak_uniform@uniform", "follower@uniform"),
          ("weak_diverse", "weak_diverse@diverse", "follower@diverse")]
 # keys whose change alters the model (what a weak connector is), not its training: such candidates are readings (A5)
 MODEL_KEYS = (
-    "connectors.weak_stiffness", "connectors.damping", "connectors.amplitude", "connectors.follower", "connectors.network")
+    "connectors.weak_stiffness", "connectors.damping", "connectors.amplitude", "connectors.follower",
+    "connectors.network")
 
 
 @dataclasses.dataclass
@@ -291,8 +292,8 @@ def write_budget(folder: str, out: str, compare: str = "") -> str:
              f"Study `{man.get('name', '?')}` ([configs/studies/connector_budget.toml](../../../configs/studies/"
              "connector_budget.toml)), protocol amendment A5's larger budget (descriptive: no candidate is chosen and "
              f"no verdict reads it): populations {', '.join(map(str, seeds))}, the two weak kinds, one connector each, "
-             "batches of 100 pairs of 1000 steps, deployed on flat for 3000 steps beside agents alone and the reference "
-             f"connectors. Run files made by divcoll {', '.join(commits) or '—'}; page by postprocess/ at "
+             "batches of 100 pairs of 1000 steps, deployed on flat for 3000 steps beside agents alone and the "
+             f"reference connectors. Run files made by divcoll {', '.join(commits) or '—'}; page by postprocess/ at "
              f"{R.code_version()}.", ""]
     planned = len(man.get("run", []))
     n_runs = sum(len(c.runs) for c in cands)
@@ -301,8 +302,8 @@ def write_budget(folder: str, out: str, compare: str = "") -> str:
     lines += ["Deployed as trained: flat travel of the kind as trained / agents alone (S: mean over populations and "
               "kinds, as A5's selection number) and / the follower; a keep-best training deploys its best weights on "
               "the validation pairs, the paper-faithful one its last.", "",
-              "| training | S (of agents alone) | of follower | per population and kind: BL (of alone) | pair-episodes | "
-              "wall s | keys |", "|---|---|---|---|---|---|---|"]
+              "| training | S (of agents alone) | of follower | per population and kind: BL (of alone) | "
+              "pair-episodes | wall s | keys |", "|---|---|---|---|---|---|---|"]
     for c in cands:
         per = "; ".join(f"{s}/{k.split('_')[1][0]}: {v['travel']:.2f} ({v['share_alone']:.0%})"
                         for (s, k), v in sorted(c.cells().items()))
@@ -329,7 +330,8 @@ def write_budget(folder: str, out: str, compare: str = "") -> str:
     for c in cands:
         for kind, _, _ in KINDS:
             vals = [curve_at(c, kind, m) for m in marks]
-            lines.append(f"| {c.name} | {kind} | " + " | ".join("—" if np.isnan(v) else f"{v:.2f}" for v in vals) + " |")
+            cells = " | ".join("—" if np.isnan(v) else f"{v:.2f}" for v in vals)
+            lines.append(f"| {c.name} | {kind} | {cells} |")
     if curves_figure(cands, os.path.join(out, "curves.png")):
         lines += ["", "![learning curves](curves.png)", ""]
     path = os.path.join(out, "budget.md")
