@@ -315,12 +315,17 @@ def write_budget(folder: str, out: str, compare: str = "") -> str:
         rows = [(c, b) for c, b in rows if b is not None and b.runs]
         if rows:
             lines += ["", f"Against the same training at the paper's budget (the development study, `{compare}`; the "
-                      "same populations, agents and deployment pairs):", "",
+                      "same agents and deployment pairs, over the populations this study has):", "",
                       "| training | S at the paper's budget | S here | difference | of follower there → here |",
                       "|---|---|---|---|---|"]
             for c, b in rows:
-                lines.append(f"| {b.name} → {c.name} | {b.S:.3f} | {c.S:.3f} | {c.S - b.S:+.3f} | "
-                             f"{b.S_follower:.2f} → {c.S_follower:.2f} |")
+                # on the populations both have: the development study's S over the budget run's populations
+                have = {r.seed for r in c.runs}
+                cells = [v for (s, _), v in b.cells().items() if s in have]
+                bs = float(np.mean([v["share_alone"] for v in cells]))
+                bf = float(np.nanmean([v["share_follower"] for v in cells]))
+                lines.append(f"| {b.name} → {c.name} | {bs:.3f} | {c.S:.3f} | {c.S - bs:+.3f} | {bf:.2f} → "
+                             f"{c.S_follower:.2f} |")
     marks = [m for m in MILESTONES if m <= max(iters)]
     lines += ["", "The learning curves: a pair's travel in 1000 steps (BL), mean over the populations, averaged over "
               "the 10 iterations up to each mark (keep-best trainings: the 32 fixed validation pairs; the others: the "

@@ -104,6 +104,17 @@ class Budget(unittest.TestCase):
         self.assertIn("| paper_1000 | 0.600 |", page)
         self.assertIn("| 100,000 |", page)
         self.assertIn("| paper → paper_1000 | 0.450 | 0.600 | +0.150 |", page)
+
+    def test_the_comparison_uses_only_the_populations_the_budget_study_has(self):
+        with tempfile.TemporaryDirectory() as d:
+            dev, budget = os.path.join(d, "dev"), os.path.join(d, "budget")
+            os.makedirs(dev)
+            os.makedirs(budget)
+            kept(dev, [("paper", [], {101: (5.0, 4.0), 102: (1.0, 1.0)}, PLAIN)])
+            kept(budget, [("paper_1000", [], {101: (6.5, 5.5)}, dict(PLAIN, iterations=1000))])
+            with open(D.write_budget(budget, os.path.join(d, "page"), compare=dev)) as fh:
+                page = fh.read()
+        self.assertIn("| paper → paper_1000 | 0.450 | 0.600 | +0.150 |", page)
         # the synthetic curves hold 3 iterations (1, 2, travel / 3): iteration 0 is 1.0, later marks are not there
         self.assertIn("| paper_1000 | weak_uniform | 1.00 | — |", page)
 
