@@ -89,31 +89,29 @@ class Selection(unittest.TestCase):
         self.assertIn("| late | added 2026-12-06, reported only |", page)
 
 
+def budget_page(dev_runs, budget_runs):
+    """the budget page of a kept study whose paper_1000 runs have `budget_runs` beside a development study whose
+    paper runs have `dev_runs` ({seed: (weak uniform, weak diverse) BL})"""
+    with tempfile.TemporaryDirectory() as d:
+        dev, budget = os.path.join(d, "dev"), os.path.join(d, "budget")
+        os.makedirs(dev)
+        os.makedirs(budget)
+        kept(dev, [("paper", [], dev_runs, PLAIN)])
+        kept(budget, [("paper_1000", ["connectors.iterations=1000"], budget_runs, dict(PLAIN, iterations=1000))])
+        with open(D.write_budget(budget, os.path.join(d, "page"), compare=dev)) as fh:
+            return fh.read()
+
+
 class Budget(unittest.TestCase):
     def test_the_budget_page_sets_each_training_beside_its_run_at_the_papers_budget(self):
-        with tempfile.TemporaryDirectory() as d:
-            dev, budget = os.path.join(d, "dev"), os.path.join(d, "budget")
-            os.makedirs(dev)
-            os.makedirs(budget)
-            kept(dev, [("paper", [], {101: (5.0, 4.0), 102: (5.0, 4.0)}, PLAIN)])
-            kept(budget, [("paper_1000", ["connectors.iterations=1000"], {101: (6.5, 5.5), 102: (6.5, 5.5)},
-                           dict(PLAIN, iterations=1000))])
-            with open(D.write_budget(budget, os.path.join(d, "page"), compare=dev)) as fh:
-                page = fh.read()
+        page = budget_page({101: (5.0, 4.0), 102: (5.0, 4.0)}, {101: (6.5, 5.5), 102: (6.5, 5.5)})
         # S: (0.65 + 0.55) / 2 against (0.5 + 0.4) / 2; 1000 iterations × 100 pairs
         self.assertIn("| paper_1000 | 0.600 |", page)
         self.assertIn("| 100,000 |", page)
         self.assertIn("| paper → paper_1000 | 0.450 | 0.600 | +0.150 |", page)
 
     def test_the_comparison_uses_only_the_populations_the_budget_study_has(self):
-        with tempfile.TemporaryDirectory() as d:
-            dev, budget = os.path.join(d, "dev"), os.path.join(d, "budget")
-            os.makedirs(dev)
-            os.makedirs(budget)
-            kept(dev, [("paper", [], {101: (5.0, 4.0), 102: (1.0, 1.0)}, PLAIN)])
-            kept(budget, [("paper_1000", [], {101: (6.5, 5.5)}, dict(PLAIN, iterations=1000))])
-            with open(D.write_budget(budget, os.path.join(d, "page"), compare=dev)) as fh:
-                page = fh.read()
+        page = budget_page({101: (5.0, 4.0), 102: (1.0, 1.0)}, {101: (6.5, 5.5)})
         self.assertIn("| paper → paper_1000 | 0.450 | 0.600 | +0.150 |", page)
         # the synthetic curves hold 3 iterations (1, 2, travel / 3): iteration 0 is 1.0, later marks are not there
         self.assertIn("| paper_1000 | weak_uniform | 1.00 | — |", page)

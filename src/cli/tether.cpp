@@ -76,8 +76,6 @@ int tether(const TetherArgs& a) {
     tethers[dep].push_back({"trained", collective::tether(cfg.connectors, kind),
                             io::read_weights_row(f, "connectors/" + kind, a.replicate)});
   }
-  std::vector<std::string> names;
-  for (const auto& t : tethers["uniform"]) names.push_back(t.name);
 
   sim::Simulator sim;
   std::vector<TetherRow> rows;

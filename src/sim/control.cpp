@@ -2,7 +2,7 @@
 //
 // agents: 54 inputs (10 sines, then per mass (x − c)κ_a and v κ_a), one network per agent, o ← α y + (1−α) o
 // connectors: 11 inputs per spring, one weight set for all 5·C connector springs (a single GEMM); or, with the
-// joint network (Model::conn_joint), the same 11·5 inputs of a connector as one column of a 55 → 32 → 32 → 5 network
+// joint network (Model::conn_cols = C), the same 11·5 inputs of a connector as one column of a 55 → 32 → 32 → 5 net
 // T: the networks' scalar (stages.hpp). The inputs are computed in double and stored as T; the outputs are read
 // as T and enter o in double. With T = double this is the spec's step, operation for operation.
 #include <algorithm>
@@ -92,7 +92,8 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     }
   }
   nn::forward_packed(m.conn_layout, m.conn_packed_for<T>(), m.conn_cols, buf.conn_acts);
-  const T* y = buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * m.conn_cols;
+  const T* y =
+      buf.conn_acts + static_cast<size_t>(m.conn_layout.activation_offset(m.conn_layout.n_layers())) * m.conn_cols;
   for (int c = 0; c < cols; ++c) {
     const int s = sc.connector_spring_index[c];
     o[s] = k.conn_alpha * y[c] + (1.0 - k.conn_alpha) * o[s];

@@ -37,9 +37,9 @@ void Model::compile(const Scene& s, int n_substeps) {
   for (int i = 0; i < N; ++i) inv_mass[i] = 1.0 / s.mass[i];
 
   agent_layout = nn::agent_layout(agent_input_size(s.constants));
-  conn_joint = joint_connector_params(s.connector_params.size());
-  conn_layout = conn_joint ? nn::joint_connector_layout() : nn::connector_layout();
-  conn_cols = conn_joint ? C : kConnectorSprings * C;
+  const bool joint = joint_connector_params(s.connector_params.size());
+  conn_layout = joint ? nn::joint_connector_layout() : nn::connector_layout();
+  conn_cols = joint ? C : kConnectorSprings * C;
   agent_params = agent_layout.param_count();
   conn_params = conn_layout.param_count();
   agent_packed_count = nn::packed_count(agent_layout);

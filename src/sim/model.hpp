@@ -42,7 +42,6 @@ struct Model {
   // 5·C columns, one per spring) or joint (55 → 32 → 32 → 5 on conn_cols = C columns, one per connector). Both
   // read the same input block (11 values per spring, springs in order, connectors in order) and write the same
   // outputs (one per spring, in that order): only the network's columns differ
-  bool conn_joint = false;
   int conn_cols = 0;
   // the controllers' weights packed for the MLP kernels (nn::pack): A × nn::packed_count(agent_layout), and
   // nn::packed_count(conn_layout) for the connectors' shared weights
