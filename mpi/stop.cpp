@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
@@ -11,7 +12,11 @@
 namespace divcoll::mpi {
 namespace {
 
-volatile std::sig_atomic_t g_signal = 0;
+// a lock-free atomic, so that two signals handled at once by two threads (both pending when the process
+// runs again: each thread takes one) cannot both see "no signal yet": exchange gives exactly one of them
+// the first signal, and the other stops at once
+std::atomic<int> g_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free atomic");
 int g_rank = 0;
 unsigned g_grace_s = 0;
 bool g_under_mpirun = false;
@@ -31,15 +36,14 @@ void on_alarm(int) {
   if (g_rank == 0)
     say("divcoll: no checkpoint within run.stop_grace_s of the signal: stopping now; the last checkpoint is kept, "
         "--resume continues from it\n");
-  ::_exit(128 + g_signal);
+  ::_exit(128 + g_signal.load());
 }
 
 void on_signal(int sig) {
-  if (g_signal != 0) {
+  if (g_signal.exchange(sig) != 0) {
     if (g_rank == 0) say("divcoll: ", signal_name(sig), " again: stopping now; the last checkpoint is kept, --resume continues from it\n");
     ::_exit(128 + sig);
   }
-  g_signal = sig;
   if (g_rank == 0 && g_grace_s > 0) {
     if (g_under_mpirun && sig != SIGUSR1)
       say("divcoll: ", signal_name(sig), " from the launcher (mpirun ends the ranks within seconds); the last checkpoint is "
@@ -91,6 +95,6 @@ void disarm_stop_signals() {
   install(SIG_DFL);
 }
 
-int stop_signal() { return g_signal; }
+int stop_signal() { return g_signal.load(); }
 
 }  // namespace divcoll::mpi
