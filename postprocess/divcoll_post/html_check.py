@@ -1,5 +1,6 @@
 """Open an HTML page in headless Chromium and check it: every image decoded, every video's metadata loaded,
-no console error, no uncaught exception, no failed request. Optionally save a screenshot.
+no console error, no uncaught exception, no failed request (each distinct problem listed once). Optionally save a
+screenshot.
 
     PYTHONPATH=postprocess /usr/bin/python3 -m divcoll_post.html_check PAGE.html [--screenshot OUT.png]
         [--width 1280] [--height 2000]
@@ -158,6 +159,12 @@ def check(page, screenshot=None, width=1280, height=2000):
             shot = cdp.send("Page.captureScreenshot", {"format": "png"}, session=session)
             with open(screenshot, "wb") as fh:
                 fh.write(base64.b64decode(shot["data"]))
+        # console messages and log entries the page made before the session's domains took hold in its renderer
+        # (the navigation can move the page to a new process; on a loaded machine a console error was once
+        # missed this way) are replayed by Chromium when a domain is enabled again; duplicates are dropped below
+        for dom in ("Runtime", "Log"):
+            cdp.send(f"{dom}.disable", session=session)
+            cdp.send(f"{dom}.enable", session=session)
         # the page's console and network events: read until the pipe has been quiet for 0.5 s (at most 10 s), not
         # one read, so that events still in flight on a loaded machine are not missed
         end = time.time() + 10
@@ -178,6 +185,7 @@ def check(page, screenshot=None, width=1280, height=2000):
                 problems.append(f"console error ({e.get('source')}): {e.get('text')} {e.get('url', '')}")
             elif meth == "Network.loadingFailed" and not p.get("canceled"):
                 problems.append(f"request failed: {p.get('errorText')}")
+        problems = list(dict.fromkeys(problems))  # each distinct problem once, in the order first seen
         try:
             cdp.send("Browser.close", timeout=10)
         except (RuntimeError, TimeoutError):

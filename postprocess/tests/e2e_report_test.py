@@ -238,6 +238,8 @@ class EndToEnd(unittest.TestCase):
         self.assertIn("image did not load", text)
         self.assertIn("video did not load", text)
         self.assertIn("boom", text)
+        # the console is read twice (live, then Chromium's replay when the domain is enabled again): once each
+        self.assertEqual(sum("boom" in p for p in problems), 1, problems)
 
 
 if __name__ == "__main__":
