@@ -159,9 +159,9 @@ def check(page, screenshot=None, width=1280, height=2000):
             shot = cdp.send("Page.captureScreenshot", {"format": "png"}, session=session)
             with open(screenshot, "wb") as fh:
                 fh.write(base64.b64decode(shot["data"]))
-        # console messages and log entries the page made before the session's domains took hold in its renderer
-        # (the navigation can move the page to a new process; on a loaded machine a console error was once
-        # missed this way) are replayed by Chromium when a domain is enabled again; duplicates are dropped below
+        # the navigation can move the page to a new renderer process, whose first console messages and log entries
+        # can come before the session's domains take hold there (on a loaded machine); Chromium replays the ones it
+        # kept when a domain is enabled again, and the duplicates this makes are dropped below
         for dom in ("Runtime", "Log"):
             cdp.send(f"{dom}.disable", session=session)
             cdp.send(f"{dom}.enable", session=session)

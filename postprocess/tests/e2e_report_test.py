@@ -238,7 +238,7 @@ class EndToEnd(unittest.TestCase):
         self.assertIn("image did not load", text)
         self.assertIn("video did not load", text)
         self.assertIn("boom", text)
-        # the console is read twice (live, then Chromium's replay when the domain is enabled again): once each
+        # the console is read live and again from Chromium's replay: the error is still listed once
         self.assertEqual(sum("boom" in p for p in problems), 1, problems)
 
 
