@@ -38,7 +38,9 @@ def summarize(path):
         w(f"# divcoll run summary: `{path}`\n")
         w(f"commit {_s(f.attrs.get('git_commit', '?'))}, seed {_s(f.attrs.get('seed', '?'))}, "
           f"ranks {_s(f.attrs.get('ranks', '?'))}, started {_s(f.attrs.get('start_time', '?'))}, "
-          f"ended {_s(f.attrs.get('end_time', '(not finished)'))}\n")
+          f"ended {_s(f.attrs.get('end_time', '(not finished)'))}"
+          + (f"; kernels {_s(f.attrs['kernels'])} on {_s(f.attrs.get('cpu', '?'))}, "
+             f"built for {_s(f.attrs.get('build_target', '?'))}" if "kernels" in f.attrs else "") + "\n")
         w("| stage | status | wall time (s, summed over sessions) | last session: ranks, busy share, master busy, "
           "imbalance (max / mean busy) |\n|---|---|---|---|")
         for st in STAGES:

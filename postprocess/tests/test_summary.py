@@ -65,6 +65,15 @@ class SummaryTest(unittest.TestCase):
         self.assertEqual(cells[2], "0.300")  # (0.5 + 0.1) / 2: a mean of environment means
         self.assertEqual(cells[3], "1")
 
+    def test_provenance_names_the_kernel_path_and_cpu_when_the_file_has_them(self):
+        self.assertNotIn("kernels", summary.summarize(self.path).splitlines()[2])
+        with h5py.File(self.path, "a") as f:
+            f.attrs["kernels"] = "avx2"
+            f.attrs["cpu"] = "AMD EPYC (x86_64)"
+            f.attrs["build_target"] = "x86-64 baseline"
+        self.assertIn("; kernels avx2 on AMD EPYC (x86_64), built for x86-64 baseline",
+                      summary.summarize(self.path).splitlines()[2])
+
     def test_claim_lines_follow_the_numbers(self):
         text = summary.summarize(self.path)
         self.assertIn("beating independent agents on flat: 1 of 2", text)

@@ -372,6 +372,65 @@ PacmapPairs pacmap_pairs(const std::vector<double>& Xp, int n, int D, const Pacm
 
 // ---- §1.6 -----------------------------------------------------------------------------------------
 
+// the eigenvalues and eigenvectors of the symmetric D×D matrix A (row-major) by cyclic Jacobi rotations
+// (Golub & Van Loan, Matrix Computations, §8.5): evals[d] and eigenvector d at evecs[d·D, (d+1)·D).
+// Why not Eigen's SelfAdjointEigenSolver: its tridiagonalisation sums in an order set by the vector width of the
+// instruction set it was compiled for, so its eigenvectors, PaCMAP's init and so its embedding differed in the last
+// bits between an AVX-512, an AVX2 and a baseline build. Every operation here is a scalar IEEE operation in a fixed
+// order (no fused multiply-adds: -ffp-contract=off), so the result is the same bits on every CPU. D is small (the
+// descriptor's 32): a sweep is D²/2 rotations of O(D), and a few sweeps converge.
+void symmetric_eigen(std::vector<double> A, int D, std::vector<double>& evals, std::vector<double>& evecs) {
+  auto at = [&](int i, int j) -> double& { return A[static_cast<size_t>(i) * D + j]; };
+  std::vector<double> V(static_cast<size_t>(D) * D, 0.0);  // columns are the eigenvectors (row-major)
+  for (int d = 0; d < D; ++d) V[static_cast<size_t>(d) * D + d] = 1.0;
+  double total = 0;
+  for (double a : A) total += a * a;
+  constexpr int kMaxSweeps = 100;
+  int sweep = 0;
+  for (; sweep < kMaxSweeps; ++sweep) {
+    double off = 0;
+    for (int p = 0; p < D; ++p)
+      for (int q = p + 1; q < D; ++q) off += at(p, q) * at(p, q);
+    if (off <= 1e-30 * total) break;  // (1e-15 of the norm, squared)
+    for (int p = 0; p < D - 1; ++p) {
+      for (int q = p + 1; q < D; ++q) {
+        const double apq = at(p, q);
+        if (apq == 0) continue;
+        // the rotation that zeroes A(p, q): t = tan θ, the smaller root of t² + 2τt − 1 = 0
+        const double tau = (at(q, q) - at(p, p)) / (2.0 * apq);
+        const double t = (tau >= 0 ? 1.0 : -1.0) / (std::abs(tau) + std::sqrt(1.0 + tau * tau));
+        const double c = 1.0 / std::sqrt(1.0 + t * t);
+        const double s = t * c;
+        for (int k = 0; k < D; ++k) {  // A ← A J (columns p, q)
+          const double akp = at(k, p), akq = at(k, q);
+          at(k, p) = c * akp - s * akq;
+          at(k, q) = s * akp + c * akq;
+        }
+        for (int k = 0; k < D; ++k) {  // A ← Jᵀ A (rows p, q)
+          const double apk = at(p, k), aqk = at(q, k);
+          at(p, k) = c * apk - s * aqk;
+          at(q, k) = s * apk + c * aqk;
+        }
+        at(p, q) = at(q, p) = 0.0;
+        for (int k = 0; k < D; ++k) {  // V ← V J
+          double* row = V.data() + static_cast<size_t>(k) * D;
+          const double vkp = row[p], vkq = row[q];
+          row[p] = c * vkp - s * vkq;
+          row[q] = s * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  DIVCOLL_THROW_UNLESS(sweep < kMaxSweeps, "pacmap: the eigen-decomposition of the covariance did not converge in "
+                                               << kMaxSweeps << " Jacobi sweeps");
+  evals.resize(D);
+  evecs.resize(static_cast<size_t>(D) * D);
+  for (int d = 0; d < D; ++d) {
+    evals[d] = at(d, d);
+    for (int k = 0; k < D; ++k) evecs[static_cast<size_t>(d) * D + k] = V[static_cast<size_t>(k) * D + d];
+  }
+}
+
 // §1.6: Y⁰ = 0.01 × (X − mean)·[v₁ v₂], v₁, v₂ the top-2 eigenvectors of the D×D covariance (= sklearn
 // PCA's top right singular vectors), each signed so that its largest-|component| entry (first on ties)
 // is positive, which is sklearn's svd_flip on V
@@ -387,20 +446,25 @@ std::vector<double> pacmap_pca_init(const std::vector<double>& Xp, int n, int D)
     for (int d = 0; d < D; ++d) mu[d] += Xp[static_cast<size_t>(i) * D + d];
   for (double& m : mu) m /= n;
   std::vector<double> xc(D);
-  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(D, D);  // upper triangle accumulated, then mirrored
+  std::vector<double> C(static_cast<size_t>(D) * D, 0.0);  // row-major; upper triangle accumulated, then mirrored
   for (int i = 0; i < n; ++i) {
     for (int d = 0; d < D; ++d) xc[d] = Xp[static_cast<size_t>(i) * D + d] - mu[d];
     for (int a = 0; a < D; ++a)
-      for (int b = a; b < D; ++b) C(a, b) += xc[a] * xc[b];
+      for (int b = a; b < D; ++b) C[static_cast<size_t>(a) * D + b] += xc[a] * xc[b];
   }
   for (int a = 0; a < D; ++a)
-    for (int b = a; b < D; ++b) C(b, a) = C(a, b) = C(a, b) / (n - 1);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(C);
-  DIVCOLL_THROW_UNLESS(es.info() == Eigen::Success, "pacmap: the eigen-decomposition of the covariance failed");
-  // eigenvalues ascend: the top two axes are the last two columns
+    for (int b = a; b < D; ++b)
+      C[static_cast<size_t>(b) * D + a] = C[static_cast<size_t>(a) * D + b] = C[static_cast<size_t>(a) * D + b] / (n - 1);
+  std::vector<double> evals, evecs;
+  symmetric_eigen(C, D, evals, evecs);
+  // the two largest eigenvalues (the first index on ties)
+  int top[2] = {-1, -1};
+  for (int a = 0; a < 2; ++a)
+    for (int d = 0; d < D; ++d)
+      if (d != top[0] && (top[a] < 0 || evals[d] > evals[top[a]])) top[a] = d;
   std::vector<double> V(2 * static_cast<size_t>(D));  // axis a at [a·D, (a+1)·D)
   for (int a = 0; a < 2; ++a) {
-    const auto v = es.eigenvectors().col(D - 1 - a);
+    const double* v = evecs.data() + static_cast<size_t>(top[a]) * D;
     int big = 0;
     for (int d = 1; d < D; ++d)
       if (std::abs(v[d]) > std::abs(v[big])) big = d;

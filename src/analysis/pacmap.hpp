@@ -57,6 +57,10 @@ PacmapPairs pacmap_pairs(const std::vector<double>& Xp, int n, int D, const Pacm
 // largest-|component| entry positive (sklearn's svd_flip on V)
 std::vector<double> pacmap_pca_init(const std::vector<double>& Xp, int n, int D);
 
+// the eigen-decomposition of a symmetric D×D matrix A (row-major) by cyclic Jacobi rotations, in the same bits on
+// every CPU: evals[d] (unordered) and its unit eigenvector at evecs[d·D, (d+1)·D)
+void symmetric_eigen(std::vector<double> A, int D, std::vector<double>& evals, std::vector<double>& evecs);
+
 // §1.7: c with ∂L/∂y_i = c·(y_i − y_j) for one pair of type 'n' (NN), 'm' (MN) or 'f' (FP), where
 // d_tilde = 1 + ‖y_i − y_j‖² and w is the pair type's weight
 double pacmap_coefficient(char type, double d_tilde, double w);

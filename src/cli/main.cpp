@@ -17,6 +17,7 @@
 #include "cli/study.hpp"
 #include "common/check.hpp"
 #include "common/version.hpp"
+#include "nn/kernel_path.hpp"
 #include "config/config.hpp"
 
 namespace divcoll::cli {
@@ -58,6 +59,7 @@ struct SchemaArgs {
 };
 struct CompareArgs {
   std::string a, b;
+  bool digest = false;
 };
 
 // the options `divcoll evolve` and `divcoll run` share
@@ -219,9 +221,20 @@ std::vector<Command> commands() {
           "compare", "are two HDF5 files' datasets bit-identical? (exit 0 yes, 1 no)",
           [](CLI::App& c, CompareArgs& a) {
             c.add_option("a", a.a, "first file")->required()->check(CLI::ExistingFile);
-            c.add_option("b", a.b, "second file")->required()->check(CLI::ExistingFile);
+            c.add_option("b", a.b, "second file (not with --digest)")->check(CLI::ExistingFile);
+            c.add_flag("--digest", a.digest,
+                       "instead, print the digest of the first file's datasets (paths, shapes and bytes; what "
+                       "tests/mpi/tiny_golden.txt holds for the tiny preset)");
           },
-          [](const CompareArgs& a) { return compare(a.a, a.b); }),
+          [](const CompareArgs& a) {
+            if (a.digest) {
+              if (!a.b.empty()) throw InputError("compare --digest takes one file");
+              std::printf("%s\n", datasets_digest(a.a).c_str());
+              return 0;
+            }
+            if (a.b.empty()) throw InputError("compare needs two files (or --digest and one)");
+            return compare(a.a, a.b);
+          }),
 
       command<GdCompareArgs>(
           "gd-compare", "measure the gradient rules of SPEC §4.4 on the same random agents",
@@ -323,7 +336,17 @@ int main(int argc, char** argv) {
   using namespace divcoll;
   CLI::App app{"divcoll: morphological diversity within machines (Hein & Bongard), reproduced"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string(DIVCOLL_VERSION) + " (" + git_commit() + ")");
+  // the kernel path is chosen before anything runs, so that a DIVCOLL_KERNELS this CPU cannot run stops here
+  nn::KernelPath kernels;
+  try {
+    kernels = nn::kernel_path();
+  } catch (const std::exception& err) {
+    std::fprintf(stderr, "divcoll: error: %s\n", err.what());
+    return 2;
+  }
+  app.set_version_flag("--version", std::string(DIVCOLL_VERSION) + " (" + git_commit() + ")\nkernels: " +
+                                        nn::kernel_path_name(kernels) + " on " + nn::cpu_description() +
+                                        "\nbuilt for: " + build_target());
   const std::vector<cli::Command> commands = cli::commands();
   std::vector<const CLI::App*> apps;
   for (const cli::Command& c : commands) {

@@ -118,9 +118,10 @@ std::vector<Entry> base_entries() {
   const std::string status_doc = "0 ok, 1 nan, 2 unstable";
   return {
       G("", "format,version,divcoll_version,git_commit,seed,ranks,config,start_time,end_time,hostname,resumed,"
-            "derived_from,base_git_commit,base_start_time",
-        "the run: format = divcoll-run, provenance (git_commit with -dirty if the build's tree was; derived_from and "
-        "base_*: the reused stages of a --from run) and config, the resolved TOML of every key"),
+            "kernels,cpu,build_target,derived_from,base_git_commit,base_start_time",
+        "the run: format = divcoll-run, provenance (git_commit with -dirty if the build's tree was; kernels, cpu and "
+        "build_target: the MLP's kernel path, the CPU and the build's instruction set of the last session, rank 0's; "
+        "derived_from and base_*: the reused stages of a --from run) and config, the resolved TOML of every key"),
       // agents (SPEC §4)
       G("agents", "status,generations_done,population," + kTiming,
         "the agents stage: evolution and gradient descent; generations_done counts the complete gen_NNN", true),

@@ -3,12 +3,14 @@
 // invariants, the σ floor), integer-cell occupancy, determinism, bad input, and a printed n = 3000 time
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -450,6 +452,42 @@ TEST(Pacmap, PcaInitFollowsTheTopPrincipalAxes) {
   for (double& x : Xm) x = -x;
   const std::vector<double> Ym = an::pacmap_pca_init(Xm, n, D);
   for (int i = 0; i < n; ++i) EXPECT_NEAR(Ym[2 * i], -0.01 * a[i], 1e-12);
+}
+
+TEST(Pacmap, JacobiEigenDecompositionSatisfiesAvEqualsLambdaV) {
+  // a random symmetric 32×32 matrix (the descriptor's size) with two nearly equal eigenvalues built in: every
+  // eigenpair satisfies A v = λ v, the vectors are orthonormal, and the eigenvalues are Eigen's
+  const int D = 32;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd B(D, D);
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) B(i, j) = g(rng);
+  Eigen::MatrixXd A = B * B.transpose() / D;
+  A(0, 0) += 1e-9;
+  std::vector<double> a(static_cast<size_t>(D) * D);
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) a[static_cast<size_t>(i) * D + j] = 0.5 * (A(i, j) + A(j, i));
+  std::vector<double> evals, evecs;
+  an::symmetric_eigen(a, D, evals, evecs);
+  ASSERT_EQ(evals.size(), static_cast<size_t>(D));
+  const double scale = A.norm();
+  for (int d = 0; d < D; ++d) {
+    const Eigen::Map<const Eigen::VectorXd> v(evecs.data() + static_cast<size_t>(d) * D, D);
+    EXPECT_NEAR(v.norm(), 1.0, 1e-13);
+    EXPECT_LT((A * v - evals[d] * v).norm(), 1e-12 * scale) << "eigenpair " << d;
+    for (int e = 0; e < d; ++e)
+      EXPECT_NEAR(v.dot(Eigen::Map<const Eigen::VectorXd>(evecs.data() + static_cast<size_t>(e) * D, D)), 0.0, 1e-13);
+  }
+  std::vector<double> sorted(evals);
+  std::sort(sorted.begin(), sorted.end());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A);
+  for (int d = 0; d < D; ++d) EXPECT_NEAR(sorted[d], es.eigenvalues()[d], 1e-12 * scale);
+  // and it is a function of its input: the same matrix twice gives the same bits
+  std::vector<double> evals2, evecs2;
+  an::symmetric_eigen(a, D, evals2, evecs2);
+  EXPECT_EQ(evals, evals2);
+  EXPECT_EQ(evecs, evecs2);
 }
 
 // ---- §4.1 item 4: integer-cell occupancy ---------------------------------------------------------------
