@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
     agents.push_back(collective::random_agent(rng));
     agents.back().anchors = collective::compute_anchors(agents.back(), AB_PHYSICS {}, 300);
   }
-  auto conn = morph::init_connector_params(rng);
+  auto conn = morph::init_connector_params(rng, morph::kConnectorInitGains[2]);  // what `divcoll bench` uses
   const collective::Tether weak{5e3, 0.6};  // the default config's weak connector
   std::vector<sim::Scene> scenes;
   for (int b = 0; b < batch; ++b) {

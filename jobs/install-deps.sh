@@ -4,7 +4,8 @@
 # Without --test: the build and runtime packages (README command 1, jobs/quickstart.sh). With --test also what
 # only the tests use (README command 2, jobs/test.sh): a private Slurm with munge, shellcheck, chromium,
 # gdb (the job-script checks print every rank's stack if a run hangs), pip and venv (the offline
-# `pip install ./postprocess` of the run-file readers).
+# `pip install ./postprocess` of the run-file readers), the AArch64 cross compiler and qemu-user (the engine built for
+# AArch64 and run against this machine's: tests/cross/aarch64_engine.sh).
 # --only build: what building and running `divcoll` needs; --only report: what only its report, figures and movies
 # need (Python's numpy, h5py, matplotlib, scipy, xarray and ffmpeg). quickstart.sh installs the second while the
 # first builds.
@@ -29,6 +30,7 @@ TEST_ONLY=(
   shellcheck slurmctld slurmd slurm-client munge
   chromium
   gdb
+  g++-aarch64-linux-gnu qemu-user
 )
 
 test=0

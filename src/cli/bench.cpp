@@ -18,6 +18,7 @@
 #include "collective/deploy_variants.hpp"
 #include "config/pipeline.hpp"
 #include "morph/body.hpp"
+#include "nn/kernel_path.hpp"
 #include "nn/mlp.hpp"
 #include "sim/engine.hpp"
 
@@ -163,8 +164,9 @@ int bench_pacmap(const std::vector<int>& sizes) {
 
 int bench(const BenchArgs& a) {
   if (!a.pacmap.empty()) return bench_pacmap(a.pacmap);
-  std::printf("# divcoll bench (one core, double precision, version %s %s)\n\n", DIVCOLL_VERSION,
-              divcoll::git_commit());
+  std::printf("# divcoll bench (one core, double precision, version %s %s; kernels %s on %s, built for %s)\n\n",
+              DIVCOLL_VERSION, divcoll::git_commit(), nn::kernel_path_name(nn::kernel_path()),
+              nn::cpu_description().c_str(), divcoll::build_target());
   Fixture f = make_fixture(24, 7);
   f.tether = collective::strength_tether((a.config.empty() ? config::default_config() : config::load_config(a.config)).connectors, "weak");
 

@@ -3,8 +3,8 @@
 namespace divcoll {
 
 const char* build_target() {
-#if defined(DIVCOLL_NATIVE_BUILD)
-  return "native (-march=native)";
+#if defined(DIVCOLL_BUILD_MARCH)
+  return "-march=" DIVCOLL_BUILD_MARCH;
 #elif defined(__x86_64__)
   return "x86-64 baseline";
 #elif defined(__aarch64__)

@@ -6,9 +6,10 @@
 // Activations are kept per layer as a column-major (size × cols) block, so one call evaluates the
 // network on `cols` inputs at once (the 5·C springs of the connectors of a collective share one weight
 // set). The kernels read the weights in a packed copy (pack(), once per parameter vector): per layer
-// Wᵀ (in × out rounded up to 4) for the forward pass, so that every output is a vector lane and a layer
-// is a chain of broadcast-multiply-adds with no horizontal sums, and W with rows padded to a multiple of 4
-// for the input gradient. With packed weights the caller owns every buffer: the *_packed calls
+// Wᵀ (in × out rounded up to whole 64-byte blocks) for the forward pass, so that every output is a vector lane and a
+// layer is a chain of broadcast-multiply-adds with no horizontal sums, and W with rows padded the same way for the
+// input gradient. The kernels are those of the kernel path in use (nn/kernel_path.hpp); every path gives the same
+// bits. With packed weights the caller owns every buffer: the *_packed calls
 // allocate nothing; forward() and backward() on a plain parameter vector pack into a temporary first.
 #pragma once
 
