@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "common/check.hpp"
+#include "common/dmath.hpp"
 #include "common/rng.hpp"
 
 namespace divcoll::analysis {
@@ -509,7 +510,7 @@ void pacmap_adam_step(std::vector<double>& y, const std::vector<double>& g, Adam
   }
   DIVCOLL_THROW_UNLESS(s.m.size() == N && s.v.size() == N, "pacmap: the Adam state does not match y in size");
   constexpr double beta1 = 0.9, beta2 = 0.999, eps = 1e-7;
-  const double lr_t = lr * std::sqrt(1.0 - std::pow(beta2, t + 1)) / (1.0 - std::pow(beta1, t + 1));
+  const double lr_t = lr * std::sqrt(1.0 - dmath::pow(beta2, t + 1)) / (1.0 - dmath::pow(beta1, t + 1));
   for (size_t q = 0; q < N; ++q) {
     s.m[q] += (1.0 - beta1) * (g[q] - s.m[q]);
     s.v[q] += (1.0 - beta2) * (g[q] * g[q] - s.v[q]);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/check.hpp"
+#include "common/dmath.hpp"
 #include "common/rng.hpp"
 
 namespace divcoll::analysis {
@@ -99,8 +100,8 @@ double incomplete_beta_regularized(double x, double a, double b) {
   if (std::isnan(x)) return kNaN;
   if (x <= 0.0) return 0.0;
   if (x >= 1.0) return 1.0;
-  const double lbt = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
-  const double bt = std::exp(lbt);
+  const double lbt = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * dmath::log(x) + b * std::log1p(-x);
+  const double bt = dmath::exp(lbt);
   // the continued fraction converges fast for x < (a+1)/(a+b+2); use the symmetry otherwise
   if (x < (a + 1.0) / (a + b + 2.0)) return bt * beta_cf(x, a, b) / a;
   return 1.0 - bt * beta_cf(1.0 - x, b, a) / b;

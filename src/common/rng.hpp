@@ -14,6 +14,8 @@
 #include <random>
 #include <vector>
 
+#include "common/dmath.hpp"
+
 namespace divcoll {
 
 using Rng = std::mt19937_64;
@@ -58,7 +60,7 @@ inline double normal(Rng& rng) {
   // u1 in (0, 1] so that log(u1) is finite
   const double u1 = static_cast<double>((rng() >> 11) + 1) * 0x1.0p-53;
   const double u2 = uniform01(rng);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  return std::sqrt(-2.0 * dmath::log(u1)) * dmath::cos(2.0 * std::numbers::pi * u2);
 }
 
 // N(mean, sd²)

@@ -1,5 +1,6 @@
 #include "evo/connector_opt.hpp"
 
+#include "common/dmath.hpp"
 #include "evo/es_cmaes.hpp"
 
 #include <algorithm>
@@ -39,8 +40,8 @@ int training_steps(const OptSettings& s, int episode_steps, int it) {
 
 double scheduled_lr(const OptSettings& s, int it, int iterations) {
   const double f = iterations > 1 ? static_cast<double>(it) / (iterations - 1) : 0.0;
-  if (s.lr_schedule == "cosine") return s.lr * (s.lr_final + (1 - s.lr_final) * 0.5 * (1 + std::cos(std::numbers::pi * f)));
-  if (s.lr_schedule == "exponential") return s.lr * std::pow(s.lr_final, f);
+  if (s.lr_schedule == "cosine") return s.lr * (s.lr_final + (1 - s.lr_final) * 0.5 * (1 + dmath::cos(std::numbers::pi * f)));
+  if (s.lr_schedule == "exponential") return s.lr * dmath::pow(s.lr_final, f);
   DIVCOLL_DEMAND(s.lr_schedule == "constant");
   return s.lr;
 }
@@ -172,7 +173,7 @@ void ConnectorOptimizer::tell(int it, const std::vector<ProbeResult>& results, d
     std::iota(idx.begin(), idx.end(), 0);
     std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return f[a] < f[b]; });
     std::vector<double> w(mu);
-    for (int i = 0; i < mu; ++i) w[i] = std::log(mu + 0.5) - std::log(i + 1.0);
+    for (int i = 0; i < mu; ++i) w[i] = dmath::log(mu + 0.5) - dmath::log(i + 1.0);
     const double ws = std::accumulate(w.begin(), w.end(), 0.0);
     std::fill(params_.begin(), params_.end(), 0.0);
     for (int i = 0; i < mu; ++i)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/dmath.hpp"
 #include "morph/body.hpp"
 
 namespace divcoll::evo {
@@ -18,7 +19,7 @@ morph::Descriptor spring_layout_descriptor(const morph::Agent& a) {
     y0 = std::min(y0, a.rest_pos[2 * m + 1]), y1 = std::max(y1, a.rest_pos[2 * m + 1]);
   }
   const double tol = morph::kMirrorTolerance;
-  auto near = [&](double ax, double ay, double bx, double by) { return std::hypot(ax - bx, ay - by) <= tol; };
+  auto near = [&](double ax, double ay, double bx, double by) { return dmath::hypot(ax - bx, ay - by) <= tol; };
   for (int axis = 0; axis < 2; ++axis) {
     int active = 0, matched = 0;
     for (size_t r = 0; r < a.spring_i.size(); ++r) {

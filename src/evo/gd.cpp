@@ -6,6 +6,7 @@
 
 #include "collective/builders.hpp"
 #include "common/check.hpp"
+#include "common/dmath.hpp"
 #include "evo/optim.hpp"
 #include "morph/body.hpp"
 
@@ -136,7 +137,7 @@ bool step_agent(morph::Agent& a, const std::vector<double>& g_params, const std:
   // rest positions: the mass with the largest gradient moves rest_move_max
   if (opt.rest_moves) {
     double gmax = 0;
-    for (int q = 0; q < sim::kAgentMasses; ++q) gmax = std::max(gmax, std::hypot(g_rest[2 * q], g_rest[2 * q + 1]));
+    for (int q = 0; q < sim::kAgentMasses; ++q) gmax = std::max(gmax, dmath::hypot(g_rest[2 * q], g_rest[2 * q + 1]));
     if (gmax > 0) {
       std::vector<double> delta(g_rest.size());
       for (size_t q = 0; q < delta.size(); ++q) delta[q] = opt.rest_move_max * g_rest[q] / gmax;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "common/dmath.hpp"
+
 namespace divcoll::evo {
 
 void Adam::step(std::vector<double>& p, std::vector<double> g, double lr, double clip_norm, int t) {
@@ -12,7 +14,7 @@ void Adam::step(std::vector<double>& p, std::vector<double> g, double lr, double
   if (n > clip_norm)
     for (double& x : g) x *= clip_norm / n;
   const double b1 = 0.9, b2 = 0.999, eps = 1e-8;
-  const double c1 = 1 - std::pow(b1, t), c2 = 1 - std::pow(b2, t);
+  const double c1 = 1 - dmath::pow(b1, t), c2 = 1 - dmath::pow(b2, t);
   for (size_t q = 0; q < p.size(); ++q) {
     m[q] = b1 * m[q] + (1 - b1) * g[q];
     v[q] = b2 * v[q] + (1 - b2) * g[q] * g[q];

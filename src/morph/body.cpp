@@ -7,6 +7,7 @@
 #include <map>
 
 #include "common/check.hpp"
+#include "common/dmath.hpp"
 #include "nn/mlp.hpp"
 
 namespace divcoll::morph {
@@ -309,7 +310,7 @@ void update_rest_lengths(Agent& a) {
   for (size_t s = 0; s < a.spring_i.size(); ++s) {
     const int i = a.spring_i[s], j = a.spring_j[s];
     a.rest_length[s] =
-        std::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
+        dmath::hypot(a.rest_pos[2 * j] - a.rest_pos[2 * i], a.rest_pos[2 * j + 1] - a.rest_pos[2 * i + 1]);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/check.hpp"
+#include "common/dmath.hpp"
 
 namespace divcoll::morph {
 namespace {
@@ -18,7 +19,7 @@ double mirror_fraction(const std::vector<double>& pos, int n, Mirror mirror) {
   for (int i = 0; i < n; ++i) {
     const auto [mx, my] = mirror(pos[2 * i], pos[2 * i + 1]);
     for (int j = 0; j < n; ++j)
-      if (std::hypot(pos[2 * j] - mx, pos[2 * j + 1] - my) <= kMirrorTolerance) {
+      if (dmath::hypot(pos[2 * j] - mx, pos[2 * j + 1] - my) <= kMirrorTolerance) {
         ++matched;
         break;
       }

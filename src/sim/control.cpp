@@ -9,6 +9,7 @@
 #include <cmath>
 #include <type_traits>
 
+#include "common/dmath.hpp"
 #include "sim/stages.hpp"
 
 namespace divcoll::sim {
@@ -30,7 +31,7 @@ void control_forward(const Model& m, int t, const double* x, const double* v, co
     if (a == 0 && t < m.sine_steps)
       std::copy(&m.sines[static_cast<size_t>(t) * k.n_sines], &m.sines[static_cast<size_t>(t + 1) * k.n_sines], act);
     else if (a == 0)
-      for (int j = 0; j < k.n_sines; ++j) act[j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
+      for (int j = 0; j < k.n_sines; ++j) act[j] = dmath::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
     else
       std::copy(buf.agent_acts, buf.agent_acts + k.n_sines, act);
     double cx = 0, cy = 0;

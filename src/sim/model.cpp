@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "common/dmath.hpp"
+
 namespace divcoll::sim {
 
 void Model::compile(const Scene& s, int n_substeps) {
@@ -14,7 +16,7 @@ void Model::compile(const Scene& s, int n_substeps) {
   substeps = n_substeps;
   dt = s.constants.dt;
   h = dt / substeps;
-  decay = std::exp(-s.env.damping * h);
+  decay = dmath::exp(-s.env.damping * h);
 
   seg_x.resize(K);
   seg_y.resize(K);
@@ -92,7 +94,7 @@ void Model::prepare_sines(int steps) {
   // the expression of control_forward's fallback, term for term: the same bits
   for (int t = sine_steps; t < steps; ++t)
     for (int j = 0; j < k.n_sines; ++j)
-      sines[static_cast<size_t>(t) * k.n_sines + j] = std::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
+      sines[static_cast<size_t>(t) * k.n_sines + j] = dmath::sin(k.omega * t * k.dt + 2.0 * M_PI * j / k.n_sines);
   sine_steps = steps;
 }
 

@@ -1,6 +1,7 @@
 // stage: free velocity (SPEC §2.3): damping, spring forces, gravity, wind, adhesion; and its adjoint
 #include <cmath>
 
+#include "common/dmath.hpp"
 #include "sim/stages.hpp"
 
 namespace divcoll::sim {
@@ -9,7 +10,7 @@ void velocity_forward(const Model& m, int t, const double* x, const double* v, c
   const Environment& env = m.scene->env;
   const double h = m.h;
   // uniform accelerations: wind w(t) = A_w sin(2π t Δt / P_w) and gravity
-  const double ax = m.has_wind ? env.wind_amp * std::sin(2.0 * M_PI * t * m.dt / env.wind_period) : 0.0;
+  const double ax = m.has_wind ? env.wind_amp * dmath::sin(2.0 * M_PI * t * m.dt / env.wind_period) : 0.0;
   const double ay = env.gravity;
   for (int i = 0; i < m.N; ++i) {
     double adh = 0;

@@ -30,9 +30,15 @@ std::string golden_digest(const std::string& file) {
 
 class TinyGolden : public ::testing::TestWithParam<std::string> {};
 
+// a parameter is a kernel path, or "libc_without_fma": the fastest path with the C library's run-time choices made as
+// on a CPU without AVX or FMA (glibc's GLIBC_TUNABLES), which picks other versions of sin, cos, exp, log and pow:
+// divcoll's results must not depend on them (common/dmath.hpp). (The generic path with glibc's software fma, what
+// such a CPU runs, gives the generic path's bits, about 25 times slower: too slow for the suite.)
 TEST_P(TinyGolden, RunFileDatasetsHaveTheCommittedDigest) {
   namespace fs = std::filesystem;
-  const nn::KernelPath path = nn::parse_kernel_path(GetParam());
+  const bool old_cpu_libc = GetParam() == "libc_without_fma";
+  const std::string kernels = old_cpu_libc ? nn::kernel_path_name(nn::best_kernel_path()) : GetParam();
+  const nn::KernelPath path = nn::parse_kernel_path(kernels);
   bool built = false;
   for (nn::KernelPath p : nn::built_kernel_paths()) built = built || p == path;
   if (!built) GTEST_SKIP() << GetParam() << " is not a kernel path of this architecture";
@@ -40,8 +46,9 @@ TEST_P(TinyGolden, RunFileDatasetsHaveTheCommittedDigest) {
   const fs::path dir = fs::temp_directory_path() / ("divcoll_golden_" + GetParam() + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string out = (dir / "tiny.h5").string();
-  const std::string cmd = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 DIVCOLL_KERNELS=" + GetParam() +
-                          " " + testing::divcoll_binary() + " run " + testing::source_dir() + "/configs/tiny.toml --out " +
+  const std::string libc = old_cpu_libc ? "GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX " : "";
+  const std::string cmd = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + libc + "DIVCOLL_KERNELS=" +
+                          kernels + " " + testing::divcoll_binary() + " run " + testing::source_dir() + "/configs/tiny.toml --out " +
                           out + " run.progress_every_s=0 > " + (dir / "log").string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const std::string digest = cli::datasets_digest(out);
@@ -56,7 +63,8 @@ TEST_P(TinyGolden, RunFileDatasetsHaveTheCommittedDigest) {
       << "last good commit and `divcoll compare OLD.h5 NEW.h5` names the datasets that differ.";
 }
 
-INSTANTIATE_TEST_SUITE_P(KernelPath, TinyGolden, ::testing::Values("generic", "avx2", "avx512", "neon"),
+INSTANTIATE_TEST_SUITE_P(KernelPath, TinyGolden, ::testing::Values("generic", "avx2", "avx512", "neon",
+                                                                            "libc_without_fma"),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 TEST(KernelPathChoice, AnUnknownOrUnrunnablePathStopsTheProgramWithItsReason) {
