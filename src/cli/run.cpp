@@ -24,6 +24,7 @@
 #include "mpi/checkpoint.hpp"
 #include "mpi/driver.hpp"
 #include "mpi/pipeline.hpp"
+#include "mpi/protocol.hpp"
 #include "mpi/stop.hpp"
 #include "mpi/wait.hpp"
 #include "nn/kernel_path.hpp"
@@ -219,21 +220,17 @@ void prepare(const RunArgs& args, int rank, int size, Prepared& p) {
   }
 }
 
-// rank 0's string on every rank (the nodes of one run may have different CPUs, and an attribute is written by all)
-std::string rank0_string(std::string s, MPI_Comm comm) {
-  int n = static_cast<int>(s.size());
-  MPI_Bcast(&n, 1, MPI_INT, 0, comm);
-  s.resize(n);
-  MPI_Bcast(s.data(), n, MPI_CHAR, 0, comm);
-  return s;
-}
-
-// how this session computes (kernel path, CPU, build), as the run file's root attributes: rewritten by every session
-// of the run, so a resumed run names its last machine (every path gives the same bits; this is provenance)
-void write_machine(io::h5::File& file, MPI_Comm comm) {
-  file.write_string("kernels", rank0_string(nn::kernel_path_name(nn::kernel_path()), comm));
-  file.write_string("cpu", rank0_string(nn::cpu_description(), comm));
-  file.write_string("build_target", rank0_string(build_target(), comm));
+// how this session computes (kernel path, CPU, build), as the run file's root attributes, rank 0's on every rank (the
+// nodes of one run may have different CPUs, and an attribute is written by all): rewritten by every session of the
+// run, so a resumed run names its last machine (every path gives the same bits; this is provenance). Returns
+// "KERNELS on CPU" for the run's first line
+std::string write_machine(io::h5::File& file, MPI_Comm comm) {
+  const std::string kernels = mpi::broadcast(comm, std::string(nn::kernel_path_name(nn::kernel_path())));
+  const std::string cpu = mpi::broadcast(comm, nn::cpu_description());
+  file.write_string("kernels", kernels);
+  file.write_string("cpu", cpu);
+  file.write_string("build_target", mpi::broadcast(comm, std::string(build_target())));
+  return kernels + " on " + cpu;
 }
 
 // a new run file is made under a temporary name and renamed into place when its provenance is written, so a file
@@ -297,11 +294,11 @@ int run_session(const RunArgs& args) {
     if (p.existing) file.write_int("resumed", file.has_attribute("resumed") ? file.read_int("resumed") + 1 : 1);
     mpi::Checkpointer checkpoints(MPI_COMM_WORLD, file, path, cfg.output.checkpoint_interval_s);
     file.write_int("ranks", size);
-    write_machine(file, MPI_COMM_WORLD);
+    const std::string machine = write_machine(file, MPI_COMM_WORLD);
     if (rank == 0)
-      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n(kernels %s on %s)\n", DIVCOLL_VERSION,
+      std::printf("divcoll %s (%s): %s on %d rank(s), seed %llu -> %s\n(kernels %s)\n", DIVCOLL_VERSION,
                   git_commit(), args.agents_only ? "evolve" : "run", size, static_cast<unsigned long long>(cfg.run.seed),
-                  path.c_str(), nn::kernel_path_name(nn::kernel_path()), nn::cpu_description().c_str());
+                  path.c_str(), machine.c_str());
     const int64_t resumed = p.existing ? file.read_int("resumed") : 0;  // every rank reads (io/h5.hpp Journal)
     if (rank == 0 && p.existing)
       std::printf("resuming %s from its last checkpoint (resumed %lld time(s))\n", path.c_str(),

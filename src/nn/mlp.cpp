@@ -4,8 +4,6 @@
 #include "nn/mlp.hpp"
 
 #include <algorithm>
-#include <cstdint>
-#include <cstring>
 #include <vector>
 
 #include "nn/kernels.hpp"

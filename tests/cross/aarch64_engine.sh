@@ -23,7 +23,7 @@ start=$(date +%s)
 # the flags of CMakeLists.txt's engine (Release: -O3 -DNDEBUG), as many files at a time as there are cores, linked
 # statically so that qemu needs no AArch64 libraries beside it
 flags=(-std=c++20 -O3 -DNDEBUG -Wall -Wextra -Werror -ffp-contract=off -fno-math-errno -DDIVCOLL_VERSION=\"cross\"
-       "-DDIVCOLL_SOURCE_DIR=\"$root\"" "-I$root/src")
+       "-DDIVCOLL_SOURCE_DIR=\"$root\"" "-I$root/src" "-I$root/tests")
 pids=()
 failed=0
 for i in "${!sources[@]}"; do

@@ -1,7 +1,8 @@
 // the engine alone, for builds that have no MPI, HDF5 or TOML: a cross-compiled AArch64 engine run under qemu-user
 // (tests/cross/aarch64_engine.sh). It reads scenes in a plain binary form, runs each for 300 steps with gradients and
 // prints, per scene, a digest (FNV-1a) of the positions, velocities, contacts, travel and every gradient block, and
-// the kernel path it ran, and the digest of common/dmath's functions on tests/common/dmath_test.cpp's grid. Built on the host with DIVCOLL_PROBE_HDF5, `engine_probe --write-scenes DIR SCENE.h5...`
+// the kernel path it ran, and the digest of common/dmath's functions on a fixed grid (common/dmath_grid.hpp). Built
+// on the host with DIVCOLL_PROBE_HDF5, `engine_probe --write-scenes DIR SCENE.h5...`
 // first writes the binary form of scene files (io/scene_file.hpp).
 //   engine_probe SCENE.bin...                     one line per scene: "<file> <digest>", then "kernels <path>"
 //   engine_probe --write-scenes DIR SCENE.h5...   (host build only)
@@ -15,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "common/dmath.hpp"
+#include "common/dmath_grid.hpp"
 #include "nn/kernel_path.hpp"
 #include "sim/engine.hpp"
 #ifdef DIVCOLL_PROBE_HDF5
@@ -87,16 +88,7 @@ int probe(int argc, char** argv) {
     name = name.substr(name.find_last_of('/') + 1);
     std::printf("%s %016llx travel %.17g\n", name.c_str(), static_cast<unsigned long long>(h), r.travel);
   }
-  // the elementary functions' bits on the grid of tests/common/dmath_test.cpp (its committed digest)
-  uint64_t h = 14695981039346656037ull;
-  for (int i = -2000; i <= 2000; ++i) {
-    const double x = i * 0.37;
-    namespace dm = divcoll::dmath;
-    for (double v : {dm::exp(x * 0.5), dm::log(std::abs(x) + 1e-3), dm::sin(x), dm::cos(x), dm::pow(0.999, std::abs(x)),
-                     dm::hypot(x, 1.5)})
-      h = fnv(h, &v, sizeof v);
-  }
-  std::printf("dmath %016llx\n", static_cast<unsigned long long>(h));
+  std::printf("dmath %016llx\n", static_cast<unsigned long long>(divcoll::test::dmath_grid_digest()));
   std::printf("kernels %s\n", divcoll::nn::kernel_path_name(divcoll::nn::kernel_path()));
   return 0;
 }
